@@ -1,0 +1,12 @@
+// Registration functions, one per area of the core, each defined in its own
+// plugin/bind_<area>.cpp and called from module.cpp.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+namespace penumbra::bindings {
+
+void bind_image(pybind11::module_& m);
+void bind_color(pybind11::module_& m);
+
+}  // namespace penumbra::bindings

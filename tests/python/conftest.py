@@ -1,0 +1,13 @@
+"""Puts the built module on sys.path: `import _penumbra` finds
+build/addon/penumbra/_penumbra*.so, exactly as a batch script would."""
+
+import os
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ADDON_DIR = os.path.join(ROOT, "build", "addon", "penumbra")
+BLENDER_OCIO = "/usr/share/blender/datafiles/colormanagement/config.ocio"
+BLENDER_WORLDS = "/usr/share/blender/datafiles/studiolights/world"
+
+if ADDON_DIR not in sys.path:
+    sys.path.insert(0, ADDON_DIR)

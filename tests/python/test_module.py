@@ -1,0 +1,57 @@
+"""The _penumbra module itself: metadata, errors as Python exceptions."""
+
+import glob
+import os
+import subprocess
+import sys
+
+import pytest
+
+import _penumbra
+from conftest import ADDON_DIR
+
+
+def test_version_is_a_dotted_string():
+    parts = _penumbra.__version__.split(".")
+    assert len(parts) == 3 and all(p.isdigit() for p in parts)
+
+
+def test_build_info_names_every_library_with_a_version():
+    info = _penumbra.build_info()
+    for key in ("compiler", "simd", "openimageio", "opencolorio", "embree", "eigen", "python"):
+        assert info[key], key
+    assert info["opencolorio"].startswith("2.")
+    assert info["embree"].startswith("3.")
+    assert info["eigen"].startswith("3.")
+    assert info["python"].startswith("3.11")
+
+
+def test_only_the_module_init_symbol_is_exported():
+    # Hidden symbols keep the module from interposing on Blender's own
+    # OpenImageIO/OpenColorIO/TBB; `nm -D --defined-only` lists what is visible.
+    so = glob.glob(os.path.join(ADDON_DIR, "_penumbra*.so"))
+    assert len(so) == 1
+    out = subprocess.run(["nm", "-D", "--defined-only", so[0]], capture_output=True, text=True, check=True).stdout
+    exported = [line.split()[-1] for line in out.splitlines() if line.split()[1] in "TDBRVW"]
+    assert exported == ["PyInit__penumbra"], exported
+
+
+def test_exception_types_are_python_exceptions_with_useful_bases():
+    assert issubclass(_penumbra.PenumbraError, RuntimeError)
+    assert issubclass(_penumbra.IoError, OSError)
+    assert issubclass(_penumbra.Cancelled, _penumbra.PenumbraError)
+
+
+def test_import_twice_under_both_names_gives_one_module():
+    # The add-on imports penumbra._penumbra and publishes it as _penumbra; a
+    # second PyInit would register the C++ types twice and fail.
+    # penumbra/__init__ imports bpy, so load native.py as part of a bare
+    # package object (the Blender tests cover the full add-on).
+    code = (
+        "import sys, types;"
+        "pkg = types.ModuleType('penumbra'); pkg.__path__ = [%r]; sys.modules['penumbra'] = pkg;"
+        "import penumbra.native as n; import _penumbra; assert n.module is _penumbra, n.load_error; print('ok')"
+    ) % ADDON_DIR
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok"
