@@ -34,6 +34,10 @@ test: build
 	$(MAKE) --no-print-directory test-blender || status=1; \
 	exit $$status
 
+# Heavy measurements, separate from the tests; results go to docs/.
+bench: build
+	$(VENV_PY) bench/run_all.py $(BENCH)
+
 demo: build
 	$(VENV_PY) examples/demo.py --out out
 

@@ -4,9 +4,13 @@
     .venv/bin/python examples/demo_blender.py --out out/bpy-4.5
 
 Loads the add-on from build/addon the way any batch script can, then runs
-each tool's part of the demo. Writes a summary.json beside the pictures."""
+each tool's part of the demo: every examples/demo_<tool>.py defines
+`run(out_folder) -> dict` and is run in name order. Writes summary.json
+beside the pictures."""
 
 import argparse
+import glob
+import importlib.util
 import json
 import os
 import sys
@@ -60,6 +64,17 @@ def hdri_round_trip(out, hdri_name):
     }
 
 
+def tool_demos():
+    for path in sorted(glob.glob(os.path.join(ROOT, "examples", "demo_*.py"))):
+        name = os.path.splitext(os.path.basename(path))[0]
+        if name == "demo_blender":
+            continue
+        spec = importlib.util.spec_from_file_location(name, path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        yield name[len("demo_"):], module
+
+
 def main():
     args = parse_args()
     out = os.path.abspath(args.out)
@@ -72,6 +87,11 @@ def main():
             "core": native.require().build_info(),
             "hdri_round_trip": hdri_round_trip(out, args.hdri),
         }
+        for name, module in tool_demos():
+            print(f"demo: {name}", flush=True)
+            tool_out = os.path.join(out, name)
+            os.makedirs(tool_out, exist_ok=True)
+            summary[name] = module.run(tool_out)
     finally:
         penumbra.unregister()
     summary["seconds"] = round(time.perf_counter() - started, 3)

@@ -8,5 +8,8 @@ namespace penumbra::bindings {
 
 void bind_image(pybind11::module_& m);
 void bind_color(pybind11::module_& m);
+void bind_visibility(pybind11::module_& m);    // visibility baker
+void bind_lights(pybind11::module_& m);        // light rigs
+void bind_colormap(pybind11::module_& m);      // colour-map lookups
 
 }  // namespace penumbra::bindings

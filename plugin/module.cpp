@@ -41,4 +41,7 @@ PYBIND11_MODULE(_penumbra, m) {
 
     penumbra::bindings::bind_image(m);
     penumbra::bindings::bind_color(m);
+    penumbra::bindings::bind_visibility(m);
+    penumbra::bindings::bind_lights(m);
+    penumbra::bindings::bind_colormap(m);
 }

@@ -20,15 +20,17 @@ if "bpy" in locals():
     # Re-running the add-on's __init__ (F8 / script reload): reload submodules
     # so edits take effect, in dependency order.
     import importlib
-    for _name in ("native", "color", "properties", "preferences", "panels"):
+    for _name in ("native", "color", "visibility", "lights", "colormap", "properties", "preferences", "panels"):
         if _name in locals():
             importlib.reload(locals()[_name])
 
 import bpy  # noqa: E402
 
-from . import native, color, properties, preferences, panels  # noqa: E402
+from . import native, color, visibility, lights, colormap, properties, preferences, panels  # noqa: E402
 
-_modules = (properties, preferences, panels)
+# Settings first (operators and panels refer to them), then each tool's
+# operators and handlers, then the panels that draw them.
+_modules = (properties, preferences, visibility, lights, colormap, panels)
 
 
 def register():

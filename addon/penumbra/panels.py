@@ -2,7 +2,7 @@
 
 import bpy
 
-from . import native
+from . import colormap, lights, native, visibility
 
 
 class PENUMBRA_PT_main(bpy.types.Panel):
@@ -35,21 +35,21 @@ class PENUMBRA_PT_visibility(_ToolSection, bpy.types.Panel):
     bl_label = "Shadowed Relighting"
 
     def draw(self, context):
-        self.layout.label(text="Visibility baker: not yet available")
+        visibility.draw_panel(self.layout, context)
 
 
 class PENUMBRA_PT_light_rig(_ToolSection, bpy.types.Panel):
     bl_label = "Light Rig"
 
     def draw(self, context):
-        self.layout.label(text="HDR light rigs: not yet available")
+        lights.draw_panel(self.layout, context)
 
 
 class PENUMBRA_PT_colormap(_ToolSection, bpy.types.Panel):
     bl_label = "Filtered Colour Maps"
 
     def draw(self, context):
-        self.layout.label(text="Colour-map lookups: not yet available")
+        colormap.draw_panel(self.layout, context)
 
 
 def _wrap(text, width):

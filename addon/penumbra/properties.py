@@ -1,45 +1,30 @@
-"""Settings stored in the .blend: one group per tool under `scene.penumbra`.
-
-The tool issues add their settings to these groups; keeping them on the scene
-means a batch script, the panel and a saved file all see the same values.
-"""
+"""Settings stored in the .blend: `scene.penumbra.<tool>`, one group per tool,
+each defined in its tool package (visibility/, lights/, colormap/), so a batch
+script, the panel and a saved file all see the same values."""
 
 import bpy
 
-
-class PenumbraVisibilitySettings(bpy.types.PropertyGroup):
-    pass
-
-
-class PenumbraLightRigSettings(bpy.types.PropertyGroup):
-    pass
-
-
-class PenumbraColormapSettings(bpy.types.PropertyGroup):
-    pass
+from . import colormap, lights, visibility
 
 
 class PenumbraSceneSettings(bpy.types.PropertyGroup):
-    visibility: bpy.props.PointerProperty(type=PenumbraVisibilitySettings)
-    light_rig: bpy.props.PointerProperty(type=PenumbraLightRigSettings)
-    colormap: bpy.props.PointerProperty(type=PenumbraColormapSettings)
+    visibility: bpy.props.PointerProperty(type=visibility.SceneSettings)
+    light_rig: bpy.props.PointerProperty(type=lights.SceneSettings)
+    colormap: bpy.props.PointerProperty(type=colormap.SceneSettings)
 
 
-classes = (
-    PenumbraVisibilitySettings,
-    PenumbraLightRigSettings,
-    PenumbraColormapSettings,
-    PenumbraSceneSettings,
-)
+def _classes():
+    return (*visibility.settings_classes, *lights.settings_classes, *colormap.settings_classes,
+            PenumbraSceneSettings)
 
 
 def register():
-    for cls in classes:
+    for cls in _classes():
         bpy.utils.register_class(cls)
     bpy.types.Scene.penumbra = bpy.props.PointerProperty(type=PenumbraSceneSettings)
 
 
 def unregister():
     del bpy.types.Scene.penumbra
-    for cls in reversed(classes):
+    for cls in reversed(_classes()):
         bpy.utils.unregister_class(cls)

@@ -1,0 +1,10 @@
+"""Visibility-baker settings stored in the .blend."""
+
+import bpy
+
+
+class VisibilitySceneSettings(bpy.types.PropertyGroup):
+    pass
+
+
+classes = (VisibilitySceneSettings,)
