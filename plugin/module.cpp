@@ -41,6 +41,9 @@ PYBIND11_MODULE(_penumbra, m) {
 
     penumbra::bindings::bind_image(m);
     penumbra::bindings::bind_color(m);
+    penumbra::bindings::bind_sh(m);
+    penumbra::bindings::bind_sh_operators(m);
+    penumbra::bindings::bind_shading(m);
     penumbra::bindings::bind_visibility(m);
     penumbra::bindings::bind_lights(m);
     penumbra::bindings::bind_colormap(m);
