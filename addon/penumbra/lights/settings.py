@@ -1,10 +1,57 @@
-"""Light-rig settings stored in the .blend."""
+"""Light-rig settings stored in the .blend (scene.penumbra.light_rig). The
+operator penumbra.build_light_rig takes its defaults from here when run from
+the panel; a script can pass every setting to the operator directly."""
 
 import bpy
 
+MAPPING_ITEMS = (
+    ("EQUIRECTANGULAR", "Equirectangular", "Full sphere, Blender's World convention (image centre faces +X)"),
+    ("HEMISPHERE_POLAR", "Polar (Hemisphere)",
+     "Upper hemisphere as latitude-longitude rows, e.g. the paper's 360x90 polar projection"),
+    ("FISHEYE", "Fisheye (Hemisphere)", "Circular equidistant fisheye looking up; top of image faces +Y"),
+    ("MIRROR_BALL", "Mirror Ball", "Photograph of a mirrored sphere taken looking along +Y"),
+)
+SAMPLER_ITEMS = (
+    ("HAVRAN", "Havran", "Continuous, bijective hemisphere mapping (smooth light motion)"),
+    ("STANDARD", "Standard", "Marginal/conditional inversion of the image (may jump between rows and at the seam)"),
+)
+POWER_ITEMS = (
+    ("REGION", "Region", "Each light carries the power and colour of its region of the map, at its energy centroid"),
+    ("EQUAL", "Equal", "The paper's: every light gets the same power"),
+)
+
 
 class LightRigSceneSettings(bpy.types.PropertyGroup):
-    pass
+    filepath: bpy.props.StringProperty(
+        name="Source", subtype="FILE_PATH",
+        description="HDR image, first frame of a numbered sequence, or video; empty uses the World's environment texture")
+    mapping: bpy.props.EnumProperty(name="Mapping", items=MAPPING_ITEMS, default="EQUIRECTANGULAR")
+    colorspace: bpy.props.StringProperty(
+        name="Colour Space", default="",
+        description="OpenColorIO colour space of the source (Blender's names, e.g. sRGB for an 8-bit video); "
+                    "empty: the source is already scene-linear")
+    count: bpy.props.IntProperty(name="Lights", default=64, min=1, soft_max=1024,
+                                 description="Number of lights (the budget when Adaptive is on)")
+    sampler: bpy.props.EnumProperty(name="Sampler", items=SAMPLER_ITEMS, default="HAVRAN")
+    power: bpy.props.EnumProperty(name="Power", items=POWER_ITEMS, default="REGION")
+    blue_noise: bpy.props.BoolProperty(name="Blue Noise", default=False,
+                                       description="Start from Lloyd-relaxed Halton points")
+    temporal_filter: bpy.props.BoolProperty(name="Temporal Filter", default=True,
+                                            description="Low-pass each light's direction and power over time")
+    cluster_max: bpy.props.IntProperty(name="Cluster Max", default=0, min=0,
+                                       description="Merge nearby lights into at most this many (0: off)")
+    adaptive_tolerance: bpy.props.FloatProperty(
+        name="Adaptive Tolerance", default=0.0, min=0.0, max=1.0, subtype="FACTOR",
+        description="Per frame, the fewest lights whose irradiance error stays below this (0: fixed count)")
+    frame_start: bpy.props.IntProperty(name="Start", default=1, description="Scene frame of the source's first frame")
+    frame_end: bpy.props.IntProperty(name="End", default=250, description="Last scene frame to fill")
+    limit_shadows: bpy.props.BoolProperty(
+        name="Shadows for 8 Strongest", default=False,
+        description="Only the 8 strongest suns cast shadows (EEVEE Legacy's limit)")
+    json_path: bpy.props.StringProperty(name="JSON", default="//penumbra_light_rig.json", subtype="FILE_PATH",
+                                        description="Per-frame lights for game engines, written beside the .blend")
+    collection: bpy.props.PointerProperty(type=bpy.types.Collection, name="Rig Collection")
+    last_report: bpy.props.StringProperty(name="Last Build", default="")
 
 
 classes = (LightRigSceneSettings,)

@@ -1,0 +1,280 @@
+"""penumbra.build_light_rig: HDR image / sequence / video -> keyframed sun rig.
+
+The work is split into steps (open, one step per frame, finish) so the same
+job runs synchronously from a script (execute) and as a modal operator with
+a timer from the UI (invoke: status-bar progress, Esc cancels). Nothing in
+the .blend changes until every frame has been processed; a cancel or an
+error leaves the file as it was."""
+
+import json
+import math
+import os
+import tempfile
+
+import bpy
+import mathutils
+
+from .. import color, native
+from . import rig_objects, settings
+
+PREVIEW_NAME = "Penumbra Light Rig Preview"
+_SETTING_NAMES = ("filepath", "mapping", "colorspace", "count", "sampler", "power", "blue_noise",
+                  "temporal_filter", "cluster_max", "adaptive_tolerance", "frame_start", "frame_end",
+                  "limit_shadows", "json_path")
+
+
+def world_environment(world):
+    """(image node, background strength, world_from_map 3x3 or None, vector_type) of the World."""
+    if world is None or not world.use_nodes or world.node_tree is None:
+        return None, 1.0, None, None
+    env = next((n for n in world.node_tree.nodes if n.type == "TEX_ENVIRONMENT" and n.image is not None), None)
+    if env is None:
+        return None, 1.0, None, None
+    strength = 1.0
+    for node in world.node_tree.nodes:
+        if node.type == "BACKGROUND":
+            strength = float(node.inputs["Strength"].default_value)
+            break
+    world_from_map = None
+    vector_type = None
+    vector = env.inputs["Vector"]
+    if vector.is_linked and vector.links[0].from_node.type == "MAPPING":
+        mapping = vector.links[0].from_node
+        vector_type = mapping.vector_type
+        rot = mathutils.Euler(tuple(mapping.inputs["Rotation"].default_value), "XYZ").to_matrix()
+        # The texture is looked up at m = R·d (POINT, VECTOR, NORMAL) or
+        # m = R⁻¹·d (TEXTURE); a light seen at map direction m sits at d.
+        world_from_map = rot if vector_type == "TEXTURE" else rot.transposed()
+    return env, strength, world_from_map, vector_type
+
+
+class _Job:
+    """One build: open the source, add frames one by one, then apply."""
+
+    def __init__(self, op, context):
+        self.core = native.require()
+        self.context = context
+        self.scene = context.scene
+        self.op = op
+        self.strength = 1.0
+        self.array = None  # pixels of a packed/generated World image
+        world_from_map = None
+        path = bpy.path.abspath(op.filepath) if op.filepath else ""
+        colorspace = op.colorspace
+        if not path:
+            env, self.strength, world_from_map, _ = world_environment(self.scene.world)
+            if env is None:
+                raise ValueError("no source file given and the World has no Environment Texture with an image")
+            image = env.image
+            if not colorspace:
+                colorspace = image.colorspace_settings.name
+            if image.packed_file is None and image.source in {"FILE", "SEQUENCE", "MOVIE"}:
+                path = bpy.path.abspath(image.filepath, library=image.library)
+            else:
+                import numpy as np
+                w, h = image.size
+                if w == 0 or h == 0:
+                    raise ValueError(f"the World's image '{image.name}' has no pixels")
+                px = np.empty(w * h * 4, dtype=np.float32)
+                image.pixels.foreach_get(px)
+                self.array = px.reshape(h, w, 4)[::-1, :, :3].copy()  # Blender rows are bottom-up
+        self.path = path
+        self.config = color.blender_config()
+        self.colorspace = colorspace or ""
+        if self.colorspace and not self.config.has_colorspace(self.colorspace):
+            names = ", ".join(self.config.colorspace_names())
+            raise ValueError(f"unknown colour space '{self.colorspace}'; Blender's config has: {names}")
+        if self.array is not None:
+            self.source = None
+            self.frames = 1
+            self.fps = 0.0
+        else:
+            self.source = self.core.open_light_source(path)
+            self.fps = self.source.frames_per_second
+            wanted = max(1, op.frame_end - op.frame_start + 1)
+            self.frames = min(self.source.frame_count, wanted)
+        if self.frames > 1 and self.fps <= 0.0:
+            self.fps = self.scene.render.fps / self.scene.render.fps_base
+        matrix = None
+        if world_from_map is not None:
+            matrix = [list(row) for row in world_from_map]
+        self.builder = self.core.LightRigBuilder(
+            count=op.count, sampler=op.sampler, blue_noise=op.blue_noise, power=op.power, mapping=op.mapping,
+            temporal_filter=op.temporal_filter, frames_per_second=self.fps, cluster_max=op.cluster_max,
+            adaptive_tolerance=op.adaptive_tolerance, world_from_map=matrix)
+        self.done = 0
+
+    def step(self):
+        """Adds the next frame; returns True when every frame is in."""
+        if self.array is not None:
+            pixels = self.array
+            if self.colorspace:
+                pixels = self.config.to_scene_linear(pixels, self.colorspace)
+            self.builder.add_frame(pixels)
+        else:
+            self.builder.add_frame_from(self.source, self.done, self.config if self.colorspace else None,
+                                        self.colorspace)
+        self.done += 1
+        return self.done >= self.frames
+
+    def apply(self):
+        rig = self.builder.finish(self.fps)
+        if self.strength != 1.0:
+            rig["rgb"] = rig["rgb"] * self.strength
+            rig["power"] = rig["power"] * self.strength
+        op = self.op
+        s = self.scene.penumbra.light_rig
+        collection = rig_objects.write_rig(self.scene, s, rig, op.frame_start, op.limit_shadows)
+        json_path = self.write_json(rig)
+        # Preview of the first frame's lights on the map.
+        image = self.builder.preview(rig["directions"][0], rig["rgb"][0], 512)
+        rig_objects.store_preview(PREVIEW_NAME, image)
+        defects = {k: sum(d[k] for d in rig["defects"]) for k in ("nan", "inf", "negative")}
+        bad = sum(defects.values())
+        msg = (f"{rig['slots']} lights over {len(rig['defects'])} frame(s) in '{collection.name}'; JSON: {json_path}")
+        if bad:
+            msg += (f"; replaced {defects['nan']} NaN, {defects['inf']} Inf and {defects['negative']} "
+                    "negative pixel values by 0")
+        s.last_report = msg[:250]
+        return msg, bad
+
+    def write_json(self, rig):
+        path = bpy.path.abspath(self.op.json_path or "//penumbra_light_rig.json")
+        if path.startswith("//") or not bpy.data.filepath and self.op.json_path.startswith("//"):
+            path = os.path.join(bpy.app.tempdir or tempfile.gettempdir(),
+                                os.path.basename(self.op.json_path.lstrip("/")) or "penumbra_light_rig.json")
+        frames = []
+        for t in range(len(rig["defects"])):
+            lights = []
+            for k in range(rig["slots"]):
+                lights.append({"index": k,
+                               "direction": [round(float(v), 7) for v in rig["directions"][t][k]],
+                               "rgb": [float(v) for v in rig["rgb"][t][k]]})
+            frames.append({"frame": self.op.frame_start + t, "lights": lights})
+        doc = {
+            "format": "penumbra-light-rig",
+            "version": 1,
+            "source": self.path or "World image (packed)",
+            "coordinates": "Blender world: +Z up; direction points from the scene towards the light",
+            "units": "rgb = irradiance in W/m^2 on a surface facing the light, scene-linear "
+                     "(Blender sun: strength = max(rgb), colour = rgb / strength)",
+            "frames_per_second": rig["frames_per_second"],
+            "filter_taps": list(rig["filter_taps"]),
+            "frames": frames,
+        }
+        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+        tmp = path + ".tmp"
+        with open(tmp, "w") as f:
+            json.dump(doc, f)
+        os.replace(tmp, path)
+        return path
+
+
+class PENUMBRA_OT_build_light_rig(bpy.types.Operator):
+    """Decompose an HDR image, sequence or video into a rig of keyframed sun lights"""
+    bl_idname = "penumbra.build_light_rig"
+    bl_label = "Build Light Rig"
+    bl_options = {"REGISTER", "UNDO"}
+
+    filepath: bpy.props.StringProperty(name="Source", subtype="FILE_PATH", default="")
+    mapping: bpy.props.EnumProperty(name="Mapping", items=settings.MAPPING_ITEMS, default="EQUIRECTANGULAR")
+    colorspace: bpy.props.StringProperty(name="Colour Space", default="")
+    count: bpy.props.IntProperty(name="Lights", default=64, min=0)
+    sampler: bpy.props.EnumProperty(name="Sampler", items=settings.SAMPLER_ITEMS, default="HAVRAN")
+    power: bpy.props.EnumProperty(name="Power", items=settings.POWER_ITEMS, default="REGION")
+    blue_noise: bpy.props.BoolProperty(name="Blue Noise", default=False)
+    temporal_filter: bpy.props.BoolProperty(name="Temporal Filter", default=True)
+    cluster_max: bpy.props.IntProperty(name="Cluster Max", default=0, min=0)
+    adaptive_tolerance: bpy.props.FloatProperty(name="Adaptive Tolerance", default=0.0, min=0.0, max=1.0)
+    frame_start: bpy.props.IntProperty(name="Start", default=1)
+    frame_end: bpy.props.IntProperty(name="End", default=250)
+    limit_shadows: bpy.props.BoolProperty(name="Shadows for 8 Strongest", default=False)
+    json_path: bpy.props.StringProperty(name="JSON", default="//penumbra_light_rig.json")
+
+    def _take_scene_defaults(self, context):
+        s = context.scene.penumbra.light_rig
+        for name in _SETTING_NAMES:
+            if not self.properties.is_property_set(name):
+                setattr(self, name, getattr(s, name))
+
+    def _start(self, context):
+        if self.count < 1:
+            raise ValueError("the light count must be at least 1")
+        if self.frame_end < self.frame_start:
+            raise ValueError(f"frame_end ({self.frame_end}) is before frame_start ({self.frame_start})")
+        return _Job(self, context)
+
+    def execute(self, context):
+        self._take_scene_defaults(context)
+        wm = context.window_manager
+        try:
+            job = self._start(context)
+            wm.progress_begin(0, job.frames)
+            try:
+                while not job.step():
+                    wm.progress_update(job.done)
+            finally:
+                wm.progress_end()
+            msg, bad = job.apply()
+        except (ValueError, OSError, RuntimeError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.report({"WARNING"} if bad else {"INFO"}, msg)
+        return {"FINISHED"}
+
+    def invoke(self, context, event):
+        self._take_scene_defaults(context)
+        try:
+            self._job = self._start(context)
+        except (ValueError, OSError, RuntimeError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        wm = context.window_manager
+        wm.progress_begin(0, self._job.frames)
+        self._timer = wm.event_timer_add(0.01, window=context.window)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _stop(self, context):
+        wm = context.window_manager
+        wm.event_timer_remove(self._timer)
+        wm.progress_end()
+        if context.area:
+            context.area.header_text_set(None)
+
+    def modal(self, context, event):
+        if event.type == "ESC":
+            self._stop(context)
+            self.report({"WARNING"}, "Light rig cancelled; nothing was changed")
+            return {"CANCELLED"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        job = self._job
+        try:
+            finished = job.step()
+            context.window_manager.progress_update(job.done)
+            if context.area:
+                context.area.header_text_set(f"Light rig: frame {job.done}/{job.frames} (Esc to cancel)")
+            if not finished:
+                return {"RUNNING_MODAL"}
+            self._stop(context)
+            msg, bad = job.apply()
+        except (ValueError, OSError, RuntimeError) as error:
+            self._stop(context)
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.report({"WARNING"} if bad else {"INFO"}, msg)
+        return {"FINISHED"}
+
+
+classes = (PENUMBRA_OT_build_light_rig,)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

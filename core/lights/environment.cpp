@@ -1,0 +1,248 @@
+#include "lights/environment.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "common/error.hpp"
+#include "lights/parallel.hpp"
+
+namespace penumbra::lights {
+namespace {
+
+constexpr double pi = std::numbers::pi;
+
+// RGB copy of a 1–4 channel image: grey copied to R, G, B; alpha dropped.
+Image to_rgb(const Image& in) {
+    if (in.channels == 3) return in;
+    Image out(in.width, in.height, 3);
+    for (std::size_t p = 0; p < in.pixel_count(); ++p) {
+        const float* src = in.pixels.data() + p * in.channels;
+        float* dst = out.pixels.data() + p * 3;
+        if (in.channels <= 2) {
+            dst[0] = dst[1] = dst[2] = src[0];
+        } else {
+            dst[0] = src[0]; dst[1] = src[1]; dst[2] = src[2];
+        }
+    }
+    return out;
+}
+
+// Bilinear look-up at continuous position (x, y), pixel centres at +0.5,
+// clamped to the image.
+void bilinear(const Image& image, double x, double y, double out[3]) {
+    const double fx = std::clamp(x - 0.5, 0.0, double(image.width - 1));
+    const double fy = std::clamp(y - 0.5, 0.0, double(image.height - 1));
+    const int x0 = int(fx), y0 = int(fy);
+    const int x1 = std::min(x0 + 1, image.width - 1), y1 = std::min(y0 + 1, image.height - 1);
+    const double ax = fx - x0, ay = fy - y0;
+    for (int c = 0; c < 3; ++c)
+        out[c] = (1 - ay) * ((1 - ax) * image.at(x0, y0, c) + ax * image.at(x1, y0, c)) +
+                 ay * ((1 - ax) * image.at(x0, y1, c) + ax * image.at(x1, y1, c));
+}
+
+// Energy-exact reduction of a latitude–longitude grid: separable overlap
+// weights, solid angle in θ (cos differences) and length in φ.
+void reduce_latlong(const Image& in, double theta_max, EnvironmentMap& out, int threads, const Progress& progress) {
+    const int W = in.width, H = in.height, w = out.width, h = out.height;
+    // Column overlaps: output column C covers input x ∈ [C·W/w, (C+1)·W/w).
+    struct Span { int first; std::vector<double> weight; };
+    std::vector<Span> columns(w), rows(h);
+    for (int C = 0; C < w; ++C) {
+        const double a = double(C) * W / w, b = double(C + 1) * W / w;
+        columns[C].first = int(std::floor(a));
+        for (int c = columns[C].first; c < W && c < b; ++c)
+            columns[C].weight.push_back(std::min<double>(b, c + 1) - std::max<double>(a, c));
+    }
+    for (int R = 0; R < h; ++R) {
+        const double a = double(R) * H / h, b = double(R + 1) * H / h;
+        rows[R].first = int(std::floor(a));
+        for (int r = rows[R].first; r < H && r < b; ++r) {
+            const double t0 = theta_max * std::max<double>(a, r) / H, t1 = theta_max * std::min<double>(b, r + 1) / H;
+            rows[R].weight.push_back(std::cos(t0) - std::cos(t1));
+        }
+    }
+    for (int R0 = 0; R0 < h; R0 += 64) {
+        progress.report(double(R0) / h);
+        parallel_for(std::min(64, h - R0), threads, [&](int b, int e) {
+            std::vector<double> row_sum(std::size_t(W) * 3);
+            for (int R = R0 + b; R < R0 + e; ++R) {
+                std::fill(row_sum.begin(), row_sum.end(), 0.0);
+                double wsum = 0.0;
+                for (std::size_t k = 0; k < rows[R].weight.size(); ++k) {
+                    const float* src = in.row(rows[R].first + int(k));
+                    const double wr = rows[R].weight[k];
+                    wsum += wr;
+                    for (std::size_t i = 0; i < std::size_t(W) * 3; ++i) row_sum[i] += wr * src[i];
+                }
+                for (int C = 0; C < w; ++C) {
+                    double acc[3] = {0, 0, 0}, cw = 0.0;
+                    for (std::size_t k = 0; k < columns[C].weight.size(); ++k) {
+                        const double wc = columns[C].weight[k];
+                        cw += wc;
+                        for (int ch = 0; ch < 3; ++ch) acc[ch] += wc * row_sum[(columns[C].first + k) * 3 + ch];
+                    }
+                    float* dst = out.rgb.data() + (std::size_t(R) * w + C) * 3;
+                    for (int ch = 0; ch < 3; ++ch) dst[ch] = float(acc[ch] / (cw * wsum));
+                }
+            }
+        });
+    }
+}
+
+}  // namespace
+
+double EnvironmentMap::theta_max() const { return full_sphere ? pi : 0.5 * pi; }
+double EnvironmentMap::theta_edge(int row) const { return theta_max() * row / height; }
+double EnvironmentMap::solid_angle(int row) const {
+    return (2.0 * pi / width) * (std::cos(theta_edge(row)) - std::cos(theta_edge(row + 1)));
+}
+Eigen::Vector3d EnvironmentMap::direction(int row, int column) const {
+    const double theta = theta_max() * (row + 0.5) / height;
+    const double phi = pi - 2.0 * pi * (column + 0.5) / width;
+    return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+}
+
+EnvironmentMap make_environment(const Image& radiance, const MapOptions& options, const Progress& progress) {
+    if (radiance.empty() || radiance.pixels.size() != radiance.pixel_count() * std::size_t(radiance.channels))
+        throw ArgumentError("the environment image is empty (" + std::to_string(radiance.width) + "x" +
+                            std::to_string(radiance.height) + "); give an image with pixels");
+    if (radiance.channels < 1 || radiance.channels > 4)
+        throw ArgumentError("the environment image needs 1 to 4 channels, got " + std::to_string(radiance.channels));
+    if (options.max_width < 0 || (options.max_width > 0 && options.max_width < 4))
+        throw ArgumentError("max_width must be 0 (no limit) or at least 4, got " + std::to_string(options.max_width));
+    if (options.supersampling < 1 || options.supersampling > 16)
+        throw ArgumentError("supersampling must be between 1 and 16, got " + std::to_string(options.supersampling));
+    if (options.projection == Projection::fisheye) options.lens.check();
+
+    Image in = to_rgb(radiance);
+    EnvironmentMap map;
+    map.defects = sanitize(in, true);
+
+    // The input's own integral, with its own pixel Jacobian.
+    {
+        const auto& Y = rec709_luminance;
+        double sum = 0.0;
+        const bool latlong = options.projection == Projection::equirectangular ||
+                             options.projection == Projection::hemisphere_polar;
+        for (int r = 0; r < in.height; ++r) {
+            double row_sum = 0.0;
+            const double row_omega = latlong ? pixel_solid_angle(options.projection, options.lens, in.width,
+                                                                 in.height, 0, r) : 0.0;
+            for (int c = 0; c < in.width; ++c) {
+                const double omega = latlong ? row_omega
+                                             : pixel_solid_angle(options.projection, options.lens, in.width,
+                                                                 in.height, c, r);
+                if (omega == 0.0) continue;
+                row_sum += omega * (Y[0] * in.at(c, r, 0) + Y[1] * in.at(c, r, 1) + Y[2] * in.at(c, r, 2));
+            }
+            sum += row_sum;
+        }
+        map.source_integral_luminance = sum;
+    }
+
+    const int limit = options.max_width;
+    if (options.projection == Projection::equirectangular || options.projection == Projection::hemisphere_polar) {
+        map.full_sphere = options.projection == Projection::equirectangular;
+        if (limit == 0 || in.width <= limit) {
+            map.width = in.width;
+            map.height = in.height;
+            map.rgb = std::move(in.pixels);
+            return map;
+        }
+        map.width = limit;
+        map.height = std::max(1, int(std::lround(double(in.height) * limit / in.width)));
+        map.rgb.assign(std::size_t(map.width) * map.height * 3, 0.0f);
+        reduce_latlong(in, map.theta_max(), map, options.threads, progress);
+        return map;
+    }
+
+    // Fisheye and mirror ball: resample to a latitude–longitude grid.
+    const double radius = 0.5 * std::min(in.width, in.height);
+    map.full_sphere = options.projection == Projection::mirror_ball;
+    int h = map.full_sphere ? int(std::ceil(0.5 * pi * radius)) : int(std::ceil(radius));
+    h = std::max(h, 4);
+    int w = (map.full_sphere ? 2 : 4) * h;
+    int ss = options.supersampling;
+    if (limit > 0 && w > limit) {
+        ss = std::min(16, int(std::ceil(double(ss) * w / limit)));
+        h = std::max(1, limit / (map.full_sphere ? 2 : 4));
+        w = (map.full_sphere ? 2 : 4) * h;
+    }
+    map.width = w;
+    map.height = h;
+    map.rgb.assign(std::size_t(w) * h * 3, 0.0f);
+    const double theta_max = map.theta_max();
+    for (int R0 = 0; R0 < h; R0 += 64) {
+        progress.report(double(R0) / h);
+        parallel_for(std::min(64, h - R0), options.threads, [&](int b, int e) {
+            for (int r = R0 + b; r < R0 + e; ++r) {
+                const double t0 = theta_max * r / h, t1 = theta_max * (r + 1) / h;
+                for (int c = 0; c < w; ++c) {
+                    double acc[3] = {0, 0, 0}, wsum = 0.0;
+                    for (int j = 0; j < ss; ++j) {
+                        // Sub-rows equally spaced in cos θ, so each look-up
+                        // stands for the same solid angle.
+                        const double z = std::cos(t0) + (std::cos(t1) - std::cos(t0)) * (j + 0.5) / ss;
+                        const double theta = std::acos(std::clamp(z, -1.0, 1.0));
+                        for (int i = 0; i < ss; ++i) {
+                            const double phi = pi - 2.0 * pi * (c + (i + 0.5) / ss) / w;
+                            const Eigen::Vector3d d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                                                    std::cos(theta));
+                            double x, y;
+                            if (!direction_to_image(options.projection, options.lens, in.width, in.height, d, x, y))
+                                continue;
+                            double v[3];
+                            bilinear(in, x, y, v);
+                            for (int ch = 0; ch < 3; ++ch) acc[ch] += v[ch];
+                            wsum += 1.0;
+                        }
+                    }
+                    float* dst = map.rgb.data() + (std::size_t(r) * w + c) * 3;
+                    for (int ch = 0; ch < 3; ++ch) dst[ch] = wsum > 0 ? float(acc[ch] / (ss * ss)) : 0.0f;
+                }
+            }
+        });
+    }
+    return map;
+}
+
+Eigen::Vector3d integral_rgb(const EnvironmentMap& map) {
+    Eigen::Vector3d total = Eigen::Vector3d::Zero();
+    for (int r = 0; r < map.height; ++r) {
+        Eigen::Vector3d row = Eigen::Vector3d::Zero();
+        for (int c = 0; c < map.width; ++c) {
+            const float* p = map.pixel(r, c);
+            row += Eigen::Vector3d(p[0], p[1], p[2]);
+        }
+        total += map.solid_angle(r) * row;
+    }
+    return total;
+}
+
+double integral_luminance(const EnvironmentMap& map, const std::array<double, 3>& y) {
+    const Eigen::Vector3d rgb = integral_rgb(map);
+    return y[0] * rgb[0] + y[1] * rgb[1] + y[2] * rgb[2];
+}
+
+Image rotate_equirectangular_z(const Image& image, double angle) {
+    if (image.empty()) throw ArgumentError("cannot rotate an empty image");
+    // Content at φ moves to φ + angle; column x ↔ φ = π − 2π x/W, so the new
+    // column x takes the old column x + angle·W/2π.
+    Image out(image.width, image.height, image.channels);
+    const double shift = angle * image.width / (2.0 * pi);
+    for (int x = 0; x < image.width; ++x) {
+        double src = x + shift;
+        src -= std::floor(src / image.width) * image.width;
+        const int x0 = int(std::floor(src)) % image.width;
+        const int x1 = (x0 + 1) % image.width;
+        const double a = src - std::floor(src);
+        for (int y = 0; y < image.height; ++y)
+            for (int c = 0; c < image.channels; ++c)
+                out.at(x, y, c) = float((1 - a) * image.at(x0, y, c) + a * image.at(x1, y, c));
+    }
+    return out;
+}
+
+}  // namespace penumbra::lights

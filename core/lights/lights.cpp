@@ -1,0 +1,275 @@
+#include "lights/lights.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "common/error.hpp"
+#include "lights/direction_index.hpp"
+#include "lights/parallel.hpp"
+#include "sh/point_sets.hpp"
+
+namespace penumbra::lights {
+namespace {
+
+constexpr double pi = std::numbers::pi;
+
+double luma(const std::array<double, 3>& y, const Eigen::Vector3d& rgb) {
+    return y[0] * rgb[0] + y[1] * rgb[1] + y[2] * rgb[2];
+}
+
+double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    // atan2 form: accurate for tiny and near-π angles alike.
+    return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+}  // namespace
+
+PowerMode parse_power_mode(const char* name) {
+    std::string s(name ? name : "");
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (s == "equal") return PowerMode::equal;
+    if (s == "region") return PowerMode::region;
+    throw ArgumentError("unknown power mode '" + std::string(name ? name : "") + "'; use 'EQUAL' or 'REGION'");
+}
+
+FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistribution& dist, const Sampler& sampler,
+                           const LightOptions& options) {
+    const std::size_t cells = std::size_t(map.width) * map.height;
+    if (options.count < 1)
+        throw ArgumentError("the light count must be at least 1, got " + std::to_string(options.count));
+    if (std::size_t(options.count) > cells)
+        throw ArgumentError("the light count " + std::to_string(options.count) + " exceeds the " +
+                            std::to_string(cells) + " pixels of the working map (" + std::to_string(map.width) +
+                            "x" + std::to_string(map.height) + "); use at most that many lights");
+
+    FrameLights out;
+    out.total_rgb = integral_rgb(map);
+    out.total_power = luma(options.luminance, out.total_rgb);
+    const int n = options.count;
+    auto points = sample_points(n, options.blue_noise);
+    if (!options.point_shift.isZero())
+        for (auto& p : points)
+            p = Eigen::Vector2d(p.x() + options.point_shift.x() - std::floor(p.x() + options.point_shift.x()),
+                                p.y() + options.point_shift.y() - std::floor(p.y() + options.point_shift.y()));
+    out.lights.resize(n);
+    std::vector<Eigen::Vector3d> sample_dirs(n);
+    std::vector<Sample> samples(n);
+    for (int k = 0; k < n; ++k) {
+        samples[k] = sampler.sample(points[k].x(), points[k].y());
+        sample_dirs[k] = samples[k].direction;
+        out.lights[k].index = k;
+        out.lights[k].sample_direction = samples[k].direction;
+        out.lights[k].direction = samples[k].direction;
+    }
+
+    if (options.power == PowerMode::equal) {
+        // The paper's equal split; colour from the cell the sample fell in.
+        const double share = out.total_power / n;
+        for (int k = 0; k < n; ++k) {
+            const float* p = map.pixel(samples[k].row, samples[k].column);
+            Eigen::Vector3d chroma(p[0], p[1], p[2]);
+            const double y = luma(options.luminance, chroma);
+            chroma = y > 0.0 ? Eigen::Vector3d(chroma / y) : Eigen::Vector3d::Ones();
+            Light& l = out.lights[k];
+            l.rgb = share * chroma;
+            l.power = share;
+            // A light covers about 1/(N p(ω)) steradians: RMS radius of that disc.
+            const double w = dist.weight[std::size_t(samples[k].row) * map.width + samples[k].column];
+            const double omega_cell = map.solid_angle(samples[k].row);
+            const double density = dist.total > 0.0 && omega_cell > 0.0 ? w / (omega_cell * dist.total) : 0.0;
+            const double cover = density > 0.0 ? 1.0 / (n * density) : 4.0 * pi / n;
+            l.spread = std::min(pi / 4, std::sqrt(std::min(cover, 2 * pi) / pi) / std::sqrt(2.0));
+        }
+        return out;
+    }
+
+    // Region mode: every cell goes to its nearest sample.
+    const DirectionIndex index(sample_dirs);
+    const int threads = resolve_threads(options.threads);
+    struct Accum {
+        std::vector<Eigen::Vector3d> rgb, moment;
+        std::vector<double> y;
+    };
+    std::vector<Accum> acc(threads);
+    std::vector<int> owner(cells, -1);
+    parallel_for(map.height, threads, [&](int b, int e) {
+        // Each chunk gets its own accumulator slot: the chunk's first row
+        // identifies it deterministically.
+        const int chunk = (map.height + threads - 1) / threads;
+        Accum& a = acc[std::min(threads - 1, b / std::max(1, chunk))];
+        a.rgb.assign(n, Eigen::Vector3d::Zero());
+        a.moment.assign(n, Eigen::Vector3d::Zero());
+        a.y.assign(n, 0.0);
+        for (int r = b; r < e; ++r) {
+            const double omega = map.solid_angle(r);
+            for (int c = 0; c < map.width; ++c) {
+                const std::size_t cell = std::size_t(r) * map.width + c;
+                const float* p = map.pixel(r, c);
+                if (p[0] <= 0.0f && p[1] <= 0.0f && p[2] <= 0.0f) continue;
+                const Eigen::Vector3d w = map.direction(r, c);
+                const int k = index.nearest(w);
+                owner[cell] = k;
+                a.rgb[k] += omega * Eigen::Vector3d(p[0], p[1], p[2]);
+                a.moment[k] += dist.weight[cell] * w;
+                a.y[k] += dist.weight[cell];
+            }
+        }
+    });
+    std::vector<Eigen::Vector3d> rgb(n, Eigen::Vector3d::Zero()), moment(n, Eigen::Vector3d::Zero());
+    std::vector<double> ysum(n, 0.0);
+    for (const Accum& a : acc) {
+        if (a.rgb.empty()) continue;
+        for (int k = 0; k < n; ++k) {
+            rgb[k] += a.rgb[k];
+            moment[k] += a.moment[k];
+            ysum[k] += a.y[k];
+        }
+    }
+    for (int k = 0; k < n; ++k) {
+        Light& l = out.lights[k];
+        l.rgb = rgb[k];
+        l.power = luma(options.luminance, rgb[k]);
+        const double m = moment[k].norm();
+        if (m > 1e-300 && ysum[k] > 0.0) l.direction = moment[k] / m;
+    }
+    // Spread: RMS angle of each region about its centroid.
+    std::vector<std::vector<double>> partial(threads);
+    parallel_for(map.height, threads, [&](int b, int e) {
+        const int chunk = (map.height + threads - 1) / threads;
+        std::vector<double>& part = partial[std::min(threads - 1, b / std::max(1, chunk))];
+        part.assign(n, 0.0);
+        for (int r = b; r < e; ++r)
+            for (int c = 0; c < map.width; ++c) {
+                const std::size_t cell = std::size_t(r) * map.width + c;
+                const int k = owner[cell];
+                if (k < 0 || dist.weight[cell] <= 0.0) continue;
+                const double a = angle_between(map.direction(r, c), out.lights[k].direction);
+                part[k] += dist.weight[cell] * a * a;
+            }
+    });
+    std::vector<double> second(n, 0.0);
+    for (const auto& part : partial)
+        for (std::size_t k = 0; k < part.size(); ++k) second[k] += part[k];
+    for (int k = 0; k < n; ++k)
+        out.lights[k].spread = ysum[k] > 0.0 ? std::sqrt(second[k] / ysum[k]) : 0.0;
+    return out;
+}
+
+FrameLights compute_lights(const EnvironmentMap& map, const LightOptions& options) {
+    const LuminanceDistribution dist = luminance_distribution(map, options.luminance, options.threads);
+    const auto sampler = make_sampler(options.sampler, dist);
+    return compute_lights(map, dist, *sampler, options);
+}
+
+Eigen::MatrixXd irradiance(const std::vector<Light>& lights, const std::vector<Eigen::Vector3d>& normals) {
+    Eigen::MatrixXd e = Eigen::MatrixXd::Zero(Eigen::Index(normals.size()), 3);
+    for (std::size_t i = 0; i < normals.size(); ++i) {
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (const Light& l : lights) {
+            const double c = normals[i].dot(l.direction);
+            if (c > 0.0) sum += c * l.rgb;
+        }
+        e.row(Eigen::Index(i)) = sum.transpose();
+    }
+    return e;
+}
+
+Eigen::MatrixXd exact_irradiance(const EnvironmentMap& map, const std::vector<Eigen::Vector3d>& normals, int threads) {
+    // Cell directions and L·Ω once, then a dense sweep per normal.
+    const std::size_t cells = std::size_t(map.width) * map.height;
+    std::vector<Eigen::Vector3d> dir;
+    std::vector<Eigen::Vector3d> flux;
+    dir.reserve(cells);
+    flux.reserve(cells);
+    for (int r = 0; r < map.height; ++r) {
+        const double omega = map.solid_angle(r);
+        for (int c = 0; c < map.width; ++c) {
+            const float* p = map.pixel(r, c);
+            if (p[0] <= 0.0f && p[1] <= 0.0f && p[2] <= 0.0f) continue;
+            dir.push_back(map.direction(r, c));
+            flux.push_back(omega * Eigen::Vector3d(p[0], p[1], p[2]));
+        }
+    }
+    Eigen::MatrixXd e = Eigen::MatrixXd::Zero(Eigen::Index(normals.size()), 3);
+    parallel_for(int(normals.size()), threads, [&](int b, int end) {
+        for (int i = b; i < end; ++i) {
+            Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+            const Eigen::Vector3d n = normals[i];
+            for (std::size_t k = 0; k < dir.size(); ++k) {
+                const double c = n.dot(dir[k]);
+                if (c > 0.0) sum += c * flux[k];
+            }
+            e.row(i) = sum.transpose();
+        }
+    });
+    return e;
+}
+
+double relative_rmse(const Eigen::MatrixXd& estimate, const Eigen::MatrixXd& reference,
+                     const std::array<double, 3>& y) {
+    if (estimate.rows() != reference.rows() || estimate.cols() != 3 || reference.cols() != 3)
+        throw ArgumentError("relative_rmse needs two (N, 3) irradiance arrays of the same size");
+    double num = 0.0, den = 0.0;
+    for (Eigen::Index i = 0; i < estimate.rows(); ++i) {
+        const double a = y[0] * estimate(i, 0) + y[1] * estimate(i, 1) + y[2] * estimate(i, 2);
+        const double b = y[0] * reference(i, 0) + y[1] * reference(i, 1) + y[2] * reference(i, 2);
+        num += (a - b) * (a - b);
+        den += b * b;
+    }
+    if (den <= 0.0) return num > 0.0 ? INFINITY : 0.0;
+    return std::sqrt(num / den);
+}
+
+AdaptiveResult adaptive_count(const EnvironmentMap& map, const LightOptions& options, double tolerance,
+                              int max_count, int normal_count) {
+    if (!(tolerance > 0.0)) throw ArgumentError("the irradiance tolerance must be positive");
+    if (max_count < 1) throw ArgumentError("the light budget must be at least 1");
+    if (normal_count < 1) throw ArgumentError("normal_count must be at least 1");
+    max_count = int(std::min<std::size_t>(std::size_t(max_count), std::size_t(map.width) * map.height));
+
+    // Reference on a reduced copy; normals over the map's domain.
+    MapOptions reduce;
+    reduce.projection = map.full_sphere ? Projection::equirectangular : Projection::hemisphere_polar;
+    reduce.max_width = 256;
+    reduce.threads = options.threads;
+    Image copy(map.width, map.height, 3);
+    copy.pixels = map.rgb;
+    const EnvironmentMap small = make_environment(copy, reduce);
+    std::vector<Eigen::Vector3d> normals = sh::fibonacci_sphere(normal_count).directions;
+    const Eigen::MatrixXd reference = exact_irradiance(small, normals, options.threads);
+
+    const LuminanceDistribution dist = luminance_distribution(map, options.luminance, options.threads);
+    const auto sampler = make_sampler(options.sampler, dist);
+    auto error_of = [&](int count) {
+        LightOptions o = options;
+        o.count = count;
+        return relative_rmse(irradiance(compute_lights(map, dist, *sampler, o).lights, normals), reference,
+                             options.luminance);
+    };
+    int previous = 0;
+    for (int count = 1;;) {
+        const double e = error_of(count);
+        if (e <= tolerance || count >= max_count) {
+            if (e > tolerance) return {count, e};
+            // Bisect between the last failing and this passing count.
+            int lo = previous, hi = count;
+            double hi_error = e;
+            while (hi - lo > 1) {
+                const int mid = (lo + hi) / 2;
+                const double m = error_of(mid);
+                if (m <= tolerance) { hi = mid; hi_error = m; } else lo = mid;
+            }
+            return {hi, hi_error};
+        }
+        previous = count;
+        // 1, 2, 3, 4, 6, 8, 12, 16, 24, ...
+        const int next = count < 4 ? count + 1 : ((count & (count - 1)) == 0 ? count * 3 / 2 : count * 4 / 3);
+        count = std::min(max_count, next);
+    }
+}
+
+}  // namespace penumbra::lights

@@ -1,0 +1,103 @@
+// Directional lights from one frame (paper §3), their irradiance, and the
+// adaptive light count.
+//
+// Light k is the k-th point of the progressive point set (sampling.hpp)
+// pushed through the chosen inverse transform. What each light carries:
+//   direction  unit vector towards the light, map coordinates (= Blender
+//              world coordinates before the World's Mapping rotation)
+//   rgb        irradiance in W/m² per channel on a surface facing the light
+//              (Blender's sun strength × colour); Σ over lights = ∫ L dω
+//   power      luminance of rgb
+//   spread     RMS angular radius (radians) of the map region the light
+//              stands for: the add-on sets the sun's angle from it
+//
+// Power modes:
+//   equal   the paper's: every light gets total/N of the luminance integral;
+//           its colour is the chromaticity (rgb/Y) of the cell it landed in;
+//           its direction is the sample's. Adding a light rescales the others'
+//           power but moves none of them.
+//   region  each light stands for its region of the map: the cells nearer to
+//           its sample than to any other sample (a spherical Voronoi cell of
+//           the samples, found with a spatial index). Its rgb is the region's
+//           ∫ L dω (so the sum is exactly the map's integral, per channel),
+//           its direction the region's energy centroid (normalized Σ Y Ω ω).
+//           Identities stay: light k is still anchored at sample k, but adding
+//           a light shrinks its neighbours' regions, so their power and
+//           centroid change a little.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "lights/environment.hpp"
+#include "lights/sampling.hpp"
+
+namespace penumbra::lights {
+
+enum class PowerMode { equal, region };
+PowerMode parse_power_mode(const char* name);  // "equal" / "region", any case
+
+struct LightOptions {
+    int count = 64;                 // N >= 1 and at most the map's cell count
+    SamplerKind sampler = SamplerKind::havran;
+    bool blue_noise = false;
+    PowerMode power = PowerMode::region;
+    std::array<double, 3> luminance = rec709_luminance;
+    int threads = 0;                // 0 = all cores
+    // Cranley–Patterson shift of the point set (added mod 1). Zero for a rig;
+    // the benchmark draws a fresh shift per frame to measure untracked,
+    // resampled-every-frame lights.
+    Eigen::Vector2d point_shift = Eigen::Vector2d::Zero();
+};
+
+struct Light {
+    int index = 0;
+    Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
+    Eigen::Vector3d rgb = Eigen::Vector3d::Zero();
+    double power = 0.0;
+    double spread = 0.0;
+    Eigen::Vector3d sample_direction = Eigen::Vector3d::UnitZ();
+};
+
+struct FrameLights {
+    std::vector<Light> lights;
+    Eigen::Vector3d total_rgb = Eigen::Vector3d::Zero();  // ∫ L dω of the map
+    double total_power = 0.0;                              // ∫ Y dω
+};
+
+// Lights of one map. ArgumentError when count < 1 or count exceeds the
+// number of grid cells (more lights than pixels cannot be told apart).
+FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistribution& distribution,
+                           const Sampler& sampler, const LightOptions& options);
+
+// Convenience: distribution + sampler + lights.
+FrameLights compute_lights(const EnvironmentMap& map, const LightOptions& options);
+
+// Irradiance (RGB, one row per normal) of a diffuse surface: Σ_k rgb_k max(0, n·d_k).
+Eigen::MatrixXd irradiance(const std::vector<Light>& lights, const std::vector<Eigen::Vector3d>& normals);
+
+// The map's own irradiance Σ_cells L Ω max(0, n·ω) (cell-centre rule), the
+// reference every error is measured against. Parallel over normals.
+Eigen::MatrixXd exact_irradiance(const EnvironmentMap& map, const std::vector<Eigen::Vector3d>& normals,
+                                 int threads = 0);
+
+// sqrt(Σ_n (Y(E_n) − Y(R_n))²) / sqrt(Σ_n Y(R_n)²), Y = luminance; 0 when
+// the reference is black and the estimate too.
+double relative_rmse(const Eigen::MatrixXd& estimate, const Eigen::MatrixXd& reference,
+                     const std::array<double, 3>& luminance = rec709_luminance);
+
+// Adaptive count: the fewest lights (searched over 1, 2, 3, 4, 6, 8, 12, ...
+// up to max_count, then bisected between the last failing and the first
+// passing count) whose irradiance relative RMSE over `normal_count` Fibonacci
+// normals is at most `tolerance`; max_count when none is. The error is
+// measured on a copy of the map reduced to at most 256 columns.
+struct AdaptiveResult {
+    int count = 0;
+    double error = 0.0;
+};
+AdaptiveResult adaptive_count(const EnvironmentMap& map, const LightOptions& options, double tolerance,
+                              int max_count, int normal_count = 128);
+
+}  // namespace penumbra::lights

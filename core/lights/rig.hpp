@@ -1,0 +1,100 @@
+// The light-rig pipeline over time: frames in (an image, a sequence, a
+// video), per-frame lights, temporal filtering by light index, optional
+// clustering, rotation into Blender world coordinates.
+//
+//   per frame:  radiance → EnvironmentMap → luminance PDF → sampler → lights
+//               (fixed count, or adaptive up to the count as a budget)
+//   finish():   FIR filter per light index (temporal.hpp) → clustering per
+//               frame (clustering.hpp) → world_from_map · direction
+//
+// Every frame of the result has `slots` lights, slot k = light index k (a
+// Blender sun per slot): a light absent in a frame (above that frame's
+// adaptive count, or merged into a cluster seeded by a lower index) has
+// power 0 there and keeps a sensible direction, so a keyframed rig never
+// jumps. Per-frame defect counts (NaN, Inf, negative pixels) are kept.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "color/color_config.hpp"
+#include "common/progress.hpp"
+#include "image/frame_source.hpp"
+#include "lights/clustering.hpp"
+#include "lights/environment.hpp"
+#include "lights/lights.hpp"
+#include "lights/temporal.hpp"
+
+namespace penumbra::lights {
+
+struct RigOptions {
+    MapOptions map;
+    LightOptions lights;            // lights.count is the count, or the budget when adaptive
+    bool temporal_filter = true;
+    double frames_per_second = 0.0; // 0: the source's rate, else 21 (the paper's)
+    double pass_hz = 5.9, stop_hz = 8.05;  // temporal.hpp: the paper's filter's edges
+    int cluster_max = 0;            // Q; 0 = no clustering
+    double cluster_correction = 1.85;
+    double adaptive_tolerance = 0.0;  // > 0: per frame the fewest lights within this irradiance error
+    Eigen::Matrix3d world_from_map = Eigen::Matrix3d::Identity();
+};
+
+struct RigFrame {
+    std::vector<Light> lights;       // `slots` entries, world coordinates
+    int active = 0;                  // lights with power > 0
+    Eigen::Vector3d total_rgb = Eigen::Vector3d::Zero();
+    double total_power = 0.0;
+    PixelDefects defects;
+    double adaptive_error = -1.0;    // the irradiance error met (adaptive count only)
+};
+
+struct LightRig {
+    std::vector<RigFrame> frames;
+    int slots = 0;
+    bool full_sphere = true;
+    FirFilter filter;                // empty when not filtered
+    double frames_per_second = 0.0;
+    double cluster_radius = 0.0;     // ε used in the last frame (0: no clustering)
+};
+
+class RigBuilder {
+public:
+    explicit RigBuilder(RigOptions options);
+
+    // One frame of scene-linear radiance in the input projection. Validates
+    // the count against the working map; ArgumentError on bad input.
+    void add_frame(const Image& radiance, const Progress& progress = {});
+    int frame_count() const { return int(raw_.size()); }
+    const EnvironmentMap& last_map() const { return last_map_; }
+    const RigOptions& options() const { return options_; }
+
+    LightRig finish(double source_frames_per_second = 0.0) const;
+
+private:
+    RigOptions options_;
+    std::vector<FrameLights> raw_;
+    std::vector<PixelDefects> defects_;
+    std::vector<double> errors_;
+    EnvironmentMap last_map_;
+};
+
+// Reads frames [start, start + count) of `source` (count < 0: to the end),
+// converts each from `colorspace` to the config's scene_linear (no
+// conversion when `config` is null), and builds the rig. Progress is
+// reported once per frame; Cancelled leaves nothing behind.
+LightRig build_light_rig(const FrameSource& source, const ColorConfig* config, const std::string& colorspace,
+                         const RigOptions& options, int start = 0, int count = -1,
+                         const Progress& progress = {});
+
+// A picture of where the lights sit on the map (the paper's Figure 1): the
+// working map at most `max_width` wide, exposed so its mean luminance is 0.18
+// and compressed by x/(1+x) into [0, 1) (scene-linear; convert to a display
+// space to view), with a green ring per light of non-zero power whose radius
+// grows with √power. `lights` in world coordinates; `world_from_map` as used
+// for the rig (its inverse places them on the map).
+Image preview_image(const EnvironmentMap& map, const std::vector<Light>& lights,
+                    const Eigen::Matrix3d& world_from_map = Eigen::Matrix3d::Identity(), int max_width = 512);
+
+}  // namespace penumbra::lights
