@@ -1,10 +1,38 @@
-"""Colour-map lookup settings stored in the .blend."""
+"""Colour-map lookup settings stored in the .blend (scene.penumbra.colormap)."""
 
 import bpy
 
 
 class ColormapSceneSettings(bpy.types.PropertyGroup):
-    pass
+    lut_width: bpy.props.IntProperty(
+        name="Lookup Width", default=256, min=2, max=8192,
+        description="Columns of the lookup image (mean axis); the paper uses 256")
+    lut_height: bpy.props.IntProperty(
+        name="Lookup Height", default=256, min=2, max=8192,
+        description="Rows of the lookup image (standard-deviation axis)")
+    sigma_spacing: bpy.props.EnumProperty(
+        name="Sigma Spacing",
+        items=[("LINEAR", "Linear", "Rows evenly spaced in sigma (most accurate in docs/colormap.md)"),
+               ("QUADRATIC", "Quadratic", "Rows packed near sigma 0")],
+        default="LINEAR")
+    sampling: bpy.props.EnumProperty(
+        name="Ramp Sampling",
+        items=[("CYCLES", "As Cycles Renders", "The 256-entry table Cycles renders a ColorRamp with"),
+               ("EXACT", "Exact", "Blender's own ColorRamp evaluation (stops, or 1024 samples for curved modes)")],
+        default="CYCLES")
+    sigma_max: bpy.props.FloatProperty(
+        name="Sigma Max", default=0.25, min=1e-6, soft_max=2.0,
+        description="Widest filter the lookup holds when the ramp is not driven by a Noise Texture "
+                    "(noise-driven ramps use the measured noise statistics)")
+    mean_min: bpy.props.FloatProperty(name="Mean Min", default=0.0, description="Smallest driving mean in the lookup")
+    mean_max: bpy.props.FloatProperty(name="Mean Max", default=1.0, description="Largest driving mean in the lookup")
+    output_folder: bpy.props.StringProperty(
+        name="Folder", default="//penumbra_luts/", subtype="DIR_PATH",
+        description="Where lookup images are written (next to the .blend by default; the temporary "
+                    "folder while the file is unsaved)")
+    write_png: bpy.props.BoolProperty(
+        name="Also 16-bit PNG", default=False,
+        description="Write a 16-bit PNG copy beside the float EXR (values clamped to [0, 1])")
 
 
 classes = (ColormapSceneSettings,)

@@ -1,0 +1,329 @@
+"""Shader node groups that sample pre-filtered colour-map lookups.
+
+- "Penumbra Filtered Ramp" (one per lookup image): Mean, Sigma -> Color,
+  Alpha. Maps (mean, σ) to the lookup's texel centres and samples it with an
+  Image Texture node set to Linear / EXTEND (no wrap at the edges).
+- "Penumbra Pixel Footprint": Pixel Size -> Footprint, the side of the
+  square with the area a pixel covers on the surface (see docs/colormap.md:
+  A = p² z³ / (t |cos θ|) from Camera Data's depth z and distance t).
+- "Penumbra Noise Filter" (per noise setting): Value, Footprint, Scale ->
+  Mean, Sigma from the tabulated Noise Texture statistics.
+- "Penumbra Height Filtered Ramp" / "Penumbra Slope Filtered Ramp": paper
+  Sec. 5.1 / 5.2, reading the microsurface statistics image.
+Groups are built with interface.add_socket, so the same code makes them in
+Blender 3.4 (inputs/outputs) and 4.x (interface)."""
+
+import math
+import os
+import tempfile
+
+import bpy
+import numpy as np
+
+from . import interface
+
+FILTERED_RAMP = "Penumbra Filtered Ramp"
+FOOTPRINT = "Penumbra Pixel Footprint"
+NOISE_FILTER = "Penumbra Noise Filter"
+HEIGHT_RAMP = "Penumbra Height Filtered Ramp"
+SLOPE_RAMP = "Penumbra Slope Filtered Ramp"
+MICROSURFACE_IMAGE = "Penumbra Microsurface Statistics"
+MICROSURFACE_TABLE_SIZE = 256
+
+
+class _Builder:
+    """Small helpers to write node arithmetic: math('MULTIPLY', a, 2.0)."""
+
+    def __init__(self, group):
+        self.group = group
+        self.nodes = group.nodes
+        self.links = group.links
+        self.x = 0
+
+    def _place(self, node):
+        node.location = (self.x, -200 * (len(self.nodes) % 6))
+        self.x += 60
+        return node
+
+    def connect(self, value, socket):
+        if isinstance(value, bpy.types.NodeSocket):
+            self.links.new(value, socket)
+        elif isinstance(value, (tuple, list)):
+            socket.default_value = value
+        else:
+            socket.default_value = float(value)
+
+    def math(self, op, a, b=0.0, c=None, clamp=False):
+        node = self._place(self.nodes.new("ShaderNodeMath"))
+        node.operation = op
+        node.use_clamp = clamp
+        self.connect(a, node.inputs[0])
+        self.connect(b, node.inputs[1])
+        if c is not None:
+            self.connect(c, node.inputs[2])
+        return node.outputs[0]
+
+    def vmath(self, op, a, b=None):
+        node = self._place(self.nodes.new("ShaderNodeVectorMath"))
+        node.operation = op
+        self.connect(a, node.inputs[0])
+        if b is not None:
+            self.connect(b, node.inputs[1])
+        return node.outputs["Value"] if op in ("DOT_PRODUCT", "LENGTH", "DISTANCE") else node.outputs["Vector"]
+
+    def vscale(self, vector, factor):
+        node = self._place(self.nodes.new("ShaderNodeVectorMath"))
+        node.operation = "SCALE"
+        self.connect(vector, node.inputs[0])
+        self.connect(factor, node.inputs["Scale"])
+        return node.outputs["Vector"]
+
+    def combine(self, x, y, z=0.0):
+        node = self._place(self.nodes.new("ShaderNodeCombineXYZ"))
+        self.connect(x, node.inputs[0])
+        self.connect(y, node.inputs[1])
+        self.connect(z, node.inputs[2])
+        return node.outputs[0]
+
+    def image(self, image, vector):
+        node = self._place(self.nodes.new("ShaderNodeTexImage"))
+        node.image = image
+        node.interpolation = "Linear"
+        node.extension = "EXTEND"   # a lookup must not wrap at its edges
+        node.projection = "FLAT"
+        self.links.new(vector, node.inputs["Vector"])
+        return node
+
+    def separate(self, color):
+        node = self._place(self.nodes.new("ShaderNodeSeparateColor"))
+        self.links.new(color, node.inputs[0])
+        return node.outputs[0], node.outputs[1], node.outputs[2]
+
+    def texel(self, fraction, count):
+        """Texture coordinate of a fractional table index fraction·(count−1):
+        texel centres sit at (i + 0.5) / count."""
+        return self.math("MULTIPLY_ADD", fraction, (count - 1) / count, 0.5 / count)
+
+
+def default_folder():
+    return os.path.join(bpy.app.tempdir or tempfile.gettempdir(), "penumbra_luts")
+
+
+def table_image(name, pixels, folder=None):
+    """A small float table (rows bottom-up as Blender stores them) written as
+    EXR by the core and loaded 'Non-Color', so it survives saving the .blend
+    (a generated image would come back blank)."""
+    from .. import native
+    folder = folder or default_folder()
+    os.makedirs(folder, exist_ok=True)
+    path = os.path.join(folder, bpy.path.clean_name(name) + ".exr")
+    native.require().write_exr(path, np.ascontiguousarray(pixels[::-1], dtype=np.float32), half=False,
+                               colorspace="Non-Color")
+    image = bpy.data.images.get(name)
+    if image is not None and os.path.normpath(bpy.path.abspath(image.filepath)) == path:
+        image.reload()
+    else:
+        if image is not None:
+            image.name = name + " (old)"
+        image = bpy.data.images.load(path, check_existing=False)
+        image.name = name
+    image.colorspace_settings.name = "Non-Color"
+    image.alpha_mode = "CHANNEL_PACKED"
+    return image
+
+
+def _new_group(name, inputs, outputs):
+    group = bpy.data.node_groups.new(name, "ShaderNodeTree")
+    for sock_name, sock_type, default in inputs:
+        interface.add_socket(group, sock_name, "INPUT", sock_type, default)
+    for sock_name, sock_type in outputs:
+        interface.add_socket(group, sock_name, "OUTPUT", sock_type)
+    gin = group.nodes.new("NodeGroupInput")
+    gin.location = (-400, 0)
+    gout = group.nodes.new("NodeGroupOutput")
+    gout.location = (1800, 0)
+    return group, gin, gout
+
+
+def _lookup_uv(b, mean, sigma, spec):
+    """UV of (mean, σ) in a lookup image written with σ = 0 at the bottom row."""
+    width, height = spec["width"], spec["height"]
+    u = b.texel(b.math("MULTIPLY_ADD", mean, 1.0 / (spec["mean_max"] - spec["mean_min"]),
+                       -spec["mean_min"] / (spec["mean_max"] - spec["mean_min"])), width)
+    t = b.math("MULTIPLY", b.math("MAXIMUM", sigma, 0.0), 1.0 / spec["sigma_max"])
+    t = b.math("MINIMUM", t, 1.0)
+    if spec["sigma_spacing"] == "quadratic":
+        t = b.math("SQRT", t)
+    v = b.texel(t, height)
+    return b.combine(u, v)
+
+
+def filtered_ramp_group(image, spec, name=FILTERED_RAMP):
+    """Mean, Sigma -> Color, Alpha from `image` (a lookup with `spec`: width,
+    height, sigma_max, mean_min, mean_max, sigma_spacing)."""
+    group, gin, gout = _new_group(name, [("Mean", "NodeSocketFloat", 0.5), ("Sigma", "NodeSocketFloat", 0.0)],
+                                  [("Color", "NodeSocketColor"), ("Alpha", "NodeSocketFloat")])
+    b = _Builder(group)
+    node = b.image(image, _lookup_uv(b, gin.outputs["Mean"], gin.outputs["Sigma"], spec))
+    b.links.new(node.outputs["Color"], gout.inputs["Color"])
+    b.links.new(node.outputs["Alpha"], gout.inputs["Alpha"])
+    group["penumbra_lookup"] = dict(spec, image=image.name)
+    return group
+
+
+def footprint_group():
+    """Footprint = p · sqrt(z³ / (t |cos θ|)): the side of a square of the
+    area one pixel covers on the surface. p is the pixel's size at unit depth
+    (2 tan(fov/2) / resolution), z the view depth, t the view distance,
+    θ the angle between view ray and normal (|cos θ| floored at 0.02, 88.9°)."""
+    group = bpy.data.node_groups.get(FOOTPRINT)
+    if group is not None:
+        return group
+    group, gin, gout = _new_group(FOOTPRINT, [("Pixel Size", "NodeSocketFloat", 0.001)],
+                                  [("Footprint", "NodeSocketFloat")])
+    b = _Builder(group)
+    camera = b.nodes.new("ShaderNodeCameraData")
+    geometry = b.nodes.new("ShaderNodeNewGeometry")
+    cos_theta = b.math("MAXIMUM", b.math("ABSOLUTE", b.vmath("DOT_PRODUCT", geometry.outputs["Incoming"],
+                                                               geometry.outputs["Normal"])), 0.02)
+    z = camera.outputs["View Z Depth"]
+    t = camera.outputs["View Distance"]
+    area_over_p2 = b.math("DIVIDE", b.math("POWER", z, 3.0), b.math("MULTIPLY", t, cos_theta))
+    b.links.new(b.math("MULTIPLY", b.math("SQRT", area_over_p2), gin.outputs["Pixel Size"]), gout.inputs[0])
+    return group
+
+
+def noise_filter_group(stats_image, stats, filter_stddev_px):
+    """Value (the noise Fac at the sample), Footprint (world), Scale (noise
+    units per world unit) -> Mean, Sigma: s = κ · Footprint · Scale (κ: the
+    pixel filter's standard deviation in pixels), then ρ(s), σ_f(s), μ from
+    the statistics image; Mean = μ + ρ (Value − μ)."""
+    name = f"{NOISE_FILTER} ({stats_image.name[len('Penumbra Noise Statistics '):]})"
+    group = bpy.data.node_groups.get(name)
+    if group is not None:
+        return group
+    group, gin, gout = _new_group(name, [("Value", "NodeSocketFloat", 0.5), ("Footprint", "NodeSocketFloat", 0.0),
+                                         ("Scale", "NodeSocketFloat", 5.0)],
+                                  [("Mean", "NodeSocketFloat"), ("Sigma", "NodeSocketFloat")])
+    b = _Builder(group)
+    logs = stats["log2_footprint"]
+    s = b.math("MULTIPLY", b.math("MULTIPLY", gin.outputs["Footprint"], gin.outputs["Scale"]), filter_stddev_px)
+    log2_s = b.math("LOGARITHM", b.math("MAXIMUM", s, 1e-9), 2.0)
+    fraction = b.math("MULTIPLY_ADD", log2_s, 1.0 / (logs[-1] - logs[0]), -logs[0] / (logs[-1] - logs[0]))
+    uv = b.combine(b.texel(fraction, len(logs)), 0.5)
+    rho, sigma, mu = b.separate(b.image(stats_image, uv).outputs["Color"])
+    mean = b.math("MULTIPLY_ADD", b.math("SUBTRACT", gin.outputs["Value"], mu), rho, mu)
+    b.links.new(mean, gout.inputs["Mean"])
+    b.links.new(sigma, gout.inputs["Sigma"])
+    return group
+
+
+def microsurface_image(folder=None):
+    """256 × 2 float image, 'Non-Color'. Row 0 (bottom) against u in [0, 1):
+    R = Λ/(1+Λ) at a = u/(1−u) (a = cot θ / σ_s), G = μ_d/σ_h and
+    B = σ_d/σ_h (exact) at Λ_sum = u/(1−u). Row 1: R = E[z], G = sd[z] of the
+    slope filtering distribution at c = u/(1−u) (c = cot θ_o / σ_s)."""
+    from .. import native
+    core = native.require()
+    n = MICROSURFACE_TABLE_SIZE
+    image = bpy.data.images.get(MICROSURFACE_IMAGE)
+    if image is not None and tuple(image.size) == (n, 2) and image.has_data:
+        return image
+    u = np.arange(n) / (n - 1)
+    u[-1] = 1.0 - 1.0 / (4 * n)  # Λ, c = ∞ stand-ins: the last texel
+    x = u / (1.0 - u)
+    pixels = np.ones((2, n, 4), np.float32)  # bottom-up rows
+    for i, xi in enumerate(x):
+        lam = core.smith_lambda_of_a(xi) if xi > 0 else math.inf
+        pixels[0, i, 0] = 1.0 if math.isinf(lam) else lam / (1.0 + lam)
+        mean, sd = core.effective_height(xi, "exact")
+        pixels[0, i, 1], pixels[0, i, 2] = mean, sd
+        pixels[1, i, 0], pixels[1, i, 1] = core.slope_shift(xi)
+    return table_image(MICROSURFACE_IMAGE, pixels, folder)
+
+
+def _table(b, image, x, row):
+    """Sample row `row` of the microsurface image at u = x / (1 + x) (x >= 0)."""
+    x = b.math("MAXIMUM", x, 0.0)
+    u = b.math("DIVIDE", x, b.math("ADD", x, 1.0))
+    uv = b.combine(b.texel(u, MICROSURFACE_TABLE_SIZE), (row + 0.5) / 2.0)
+    return b.separate(b.image(image, uv).outputs["Color"])
+
+
+def _cot_over_sigma(b, cos_theta, sigma):
+    """cot θ / σ from cos θ (clamped to [0, 1])."""
+    c = b.math("MINIMUM", b.math("MAXIMUM", cos_theta, 0.0), 1.0)
+    sin = b.math("SQRT", b.math("MAXIMUM", b.math("SUBTRACT", 1.0, b.math("MULTIPLY", c, c)), 1e-12))
+    return b.math("DIVIDE", b.math("DIVIDE", c, sin), b.math("MAXIMUM", sigma, 1e-6))
+
+
+def _lambda(b, image, a):
+    g, _, _ = _table(b, image, a, 0)
+    return b.math("DIVIDE", g, b.math("MAXIMUM", b.math("SUBTRACT", 1.0, g), 1e-6))  # Λ = g / (1 − g)
+
+
+def height_ramp_group(lookup_image, spec, name=HEIGHT_RAMP):
+    """Paper Sec. 5.1: Height Mean (the ramp's input at the mean surface),
+    Height Sigma σ_h, Slope Sigma σ_s, Light Direction (world) -> Color (the
+    ramp filtered over the visible and lit heights, N(mean + μ_d σ_h, σ_d σ_h))
+    and Visibility V̄ (Eq. 13)."""
+    group, gin, gout = _new_group(name, [("Height Mean", "NodeSocketFloat", 0.5),
+                                         ("Height Sigma", "NodeSocketFloat", 0.1),
+                                         ("Slope Sigma", "NodeSocketFloat", 0.3),
+                                         ("Light Direction", "NodeSocketVector", (0.0, 0.0, 1.0))],
+                                  [("Color", "NodeSocketColor"), ("Alpha", "NodeSocketFloat"),
+                                   ("Visibility", "NodeSocketFloat")])
+    b = _Builder(group)
+    table = microsurface_image()
+    geometry = b.nodes.new("ShaderNodeNewGeometry")
+    normal = geometry.outputs["Normal"]
+    cos_o = b.vmath("DOT_PRODUCT", geometry.outputs["Incoming"], normal)
+    cos_i = b.vmath("DOT_PRODUCT", b.vmath("NORMALIZE", gin.outputs["Light Direction"]), normal)
+    lam_o = _lambda(b, table, _cot_over_sigma(b, cos_o, gin.outputs["Slope Sigma"]))
+    lam_i = _lambda(b, table, _cot_over_sigma(b, cos_i, gin.outputs["Slope Sigma"]))
+    lam_sum = b.math("ADD", lam_o, lam_i)
+    _, mu_d, sigma_d = _table(b, table, lam_sum, 0)
+    mean = b.math("MULTIPLY_ADD", mu_d, gin.outputs["Height Sigma"], gin.outputs["Height Mean"])
+    sigma = b.math("MULTIPLY", sigma_d, gin.outputs["Height Sigma"])
+    node = b.image(lookup_image, _lookup_uv(b, mean, sigma, spec))
+    b.links.new(node.outputs["Color"], gout.inputs["Color"])
+    b.links.new(node.outputs["Alpha"], gout.inputs["Alpha"])
+    one_plus_o = b.math("ADD", lam_o, 1.0)
+    b.links.new(b.math("DIVIDE", one_plus_o, b.math("ADD", one_plus_o, lam_i)), gout.inputs["Visibility"])
+    group["penumbra_lookup"] = dict(spec, image=lookup_image.name)
+    return group
+
+
+def slope_ramp_group(lookup_image, spec, name=SLOPE_RAMP):
+    """Paper Sec. 5.2: the ramp driven by v = Value at Zero Slope + Value per
+    Slope · (s · Direction), s the microfacet slope (isotropic, σ_s), filtered
+    over the facets the viewer sees: along the view's azimuth d the slope
+    shifts by σ_s E[z] and narrows to σ_s sd[z] (microsurface.hpp), so
+    v ~ N(v0 + k σ_s E[z] cos ψ, (k σ_s)² (1 − (1 − sd²) cos² ψ)), ψ the angle
+    between d and Direction."""
+    group, gin, gout = _new_group(name, [("Value at Zero Slope", "NodeSocketFloat", 0.5),
+                                         ("Value per Slope", "NodeSocketFloat", 1.0),
+                                         ("Slope Sigma", "NodeSocketFloat", 0.3),
+                                         ("Direction", "NodeSocketVector", (1.0, 0.0, 0.0))],
+                                  [("Color", "NodeSocketColor"), ("Alpha", "NodeSocketFloat")])
+    b = _Builder(group)
+    table = microsurface_image()
+    geometry = b.nodes.new("ShaderNodeNewGeometry")
+    normal = geometry.outputs["Normal"]
+    incoming = geometry.outputs["Incoming"]
+    cos_o = b.vmath("DOT_PRODUCT", incoming, normal)
+    tangential = b.vmath("SUBTRACT", incoming, b.vscale(normal, cos_o))
+    d = b.vmath("NORMALIZE", tangential)
+    direction = b.vmath("NORMALIZE", gin.outputs["Direction"])
+    cos_psi = b.vmath("DOT_PRODUCT", d, direction)
+    ez, sdz, _ = _table(b, table, _cot_over_sigma(b, cos_o, gin.outputs["Slope Sigma"]), 1)
+    k_sigma = b.math("MULTIPLY", gin.outputs["Value per Slope"], gin.outputs["Slope Sigma"])
+    mean = b.math("MULTIPLY_ADD", b.math("MULTIPLY", k_sigma, ez), cos_psi, gin.outputs["Value at Zero Slope"])
+    shrink = b.math("MULTIPLY", b.math("SUBTRACT", 1.0, b.math("MULTIPLY", sdz, sdz)),
+                    b.math("MULTIPLY", cos_psi, cos_psi))
+    sigma = b.math("MULTIPLY", b.math("ABSOLUTE", k_sigma), b.math("SQRT", b.math("MAXIMUM", b.math("SUBTRACT", 1.0, shrink), 0.0)))
+    node = b.image(lookup_image, _lookup_uv(b, mean, sigma, spec))
+    b.links.new(node.outputs["Color"], gout.inputs["Color"])
+    b.links.new(node.outputs["Alpha"], gout.inputs["Alpha"])
+    group["penumbra_lookup"] = dict(spec, image=lookup_image.name)
+    return group

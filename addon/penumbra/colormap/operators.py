@@ -1,0 +1,414 @@
+"""penumbra.bake_colormap_lut: replace the active ColorRamp by a node group
+that samples a pre-filtered lookup image, and penumbra.restore_color_ramp to
+put the ramp back.
+
+Everything that can fail is checked before anything is changed (plan);
+the lookup is then built (in a worker thread when run from the UI, so Esc
+cancels and the status bar shows progress); only then are files written
+(atomically, by the core) and the node tree edited (apply)."""
+
+import math
+import os
+import tempfile
+import threading
+
+import bpy
+import numpy as np
+
+from . import node_groups, noise_statistics, ramp as ramp_io
+from .. import color, native
+
+
+class BakeError(Exception):
+    """A problem the user can fix; its message goes to the operator report."""
+
+
+def _editable_material(context):
+    obj = context.object
+    material = getattr(context, "material", None) or (obj.active_material if obj else None)
+    if material is None:
+        raise BakeError("No active material: select an object with a material")
+    if material.library is not None:
+        raise BakeError(f"Material '{material.name}' is linked from the library '{material.library.filepath}' "
+                        "and is read-only: make it local first (nothing was changed)")
+    if not material.use_nodes or material.node_tree is None:
+        raise BakeError(f"Material '{material.name}' does not use nodes: there is no ColorRamp to filter")
+    return material
+
+
+def _pixel_size(scene):
+    """2 tan(fov/2) / resolution along the fitted axis: a pixel's size at unit depth."""
+    camera = scene.camera
+    if camera is None or camera.type != "CAMERA":
+        return None, "the scene has no camera: the footprint is zero (plain ramp) until you add one and bake again"
+    data = camera.data
+    scale = scene.render.resolution_percentage / 100.0
+    res_x, res_y = scene.render.resolution_x * scale, scene.render.resolution_y * scale
+    if data.type == "ORTHO":
+        return data.ortho_scale / max(res_x, res_y), "orthographic camera: the footprint node assumes perspective"
+    fit = data.sensor_fit
+    if fit == "VERTICAL" or (fit == "AUTO" and res_y > res_x):
+        return 2.0 * math.tan(data.angle_y / 2.0) / res_y, None
+    return 2.0 * math.tan(data.angle_x / 2.0) / res_x, None
+
+
+def _coordinate_scale(noise, obj):
+    """Texture-coordinate units per world unit of the noise's Vector input
+    (Generated / unlinked: 1 / object dimensions; Object: 1 / object scale)."""
+    links = noise.inputs["Vector"].links
+    dims = sorted((d for d in (obj.dimensions if obj else ()) if d > 1e-9), reverse=True)[:2]
+    generated = 1.0 / math.sqrt(dims[0] * dims[-1]) if dims else 1.0
+    if not links:
+        return generated, None
+    socket = links[0].from_socket
+    if socket.node.bl_idname == "ShaderNodeTexCoord":
+        if socket.name == "Generated":
+            return generated, None
+        if socket.name == "Object" and socket.node.object is None and obj is not None:
+            s = sorted(abs(v) for v in obj.scale)
+            return 1.0 / math.sqrt(max(s[1] * s[2], 1e-12)), None
+    return 1.0, (f"the noise's coordinates come from '{socket.node.name}.{socket.name}': assuming one texture "
+                 "unit per world unit (adjust the Noise Filter's Scale input)")
+
+
+class BakePlan:
+    """Everything checked and gathered from the scene before any change."""
+
+    def __init__(self, context, settings, image_name=""):
+        self.warnings = []
+        self.scene = context.scene
+        self.settings = settings
+        self.image = None
+        self.material = None
+        self.node = None
+        self.noise = None
+        if image_name:
+            self._plan_image(image_name)
+        else:
+            self._plan_ramp(context)
+        self.spec = {
+            "width": settings.lut_width, "height": settings.lut_height,
+            "sigma_max": self.sigma_max, "mean_min": self.mean_min, "mean_max": self.mean_max,
+            "sigma_spacing": settings.sigma_spacing.lower(),
+        }
+        if not (self.sigma_max > 0 and math.isfinite(self.sigma_max)):
+            raise BakeError("Sigma Max must be a finite number > 0")
+        if not self.mean_max > self.mean_min:
+            raise BakeError("Mean Max must be greater than Mean Min")
+        self.folder = self._output_folder()
+
+    def _plan_image(self, image_name):
+        image = bpy.data.images.get(image_name)
+        if image is None:
+            raise BakeError(f"No image named '{image_name}'")
+        width, height = image.size
+        if width < 1 or height < 1:
+            raise BakeError(f"Image '{image_name}' has no pixels (is its file missing?)")
+        pixels = np.empty(width * height * 4, np.float32)
+        image.pixels.foreach_get(pixels)
+        row = pixels.reshape(height, width, 4)[height // 2]  # the middle row is the colour map
+        rgb = row[:, :3]
+        space = image.colorspace_settings.name
+        if not image.is_float and space not in ("Non-Color", "Linear", "Linear Rec.709", "Raw"):
+            rgb = color.blender_config().to_scene_linear(rgb[None, :, :].copy(), space)[0]
+        self.image = image
+        self.samples = np.concatenate([rgb, row[:, 3:4]], axis=1).astype(np.float32)
+        if not np.isfinite(self.samples).all():
+            raise BakeError(f"Image '{image_name}' has NaN or infinite pixels in its middle row")
+        self.sigma_max = self.settings.sigma_max
+        self.mean_min, self.mean_max = self.settings.mean_min, self.settings.mean_max
+        self.name = bpy.path.clean_name(image.name)
+
+    def _plan_ramp(self, context):
+        self.material = _editable_material(context)
+        tree = self.material.node_tree
+        node = tree.nodes.active
+        if node is None or node.bl_idname != "ShaderNodeValToRGB":
+            what = f"'{node.name}' ({node.bl_idname})" if node is not None else "nothing"
+            raise BakeError(f"The active node of '{self.material.name}' is {what}, not a ColorRamp: "
+                            "click a ColorRamp node first")
+        self.node = node
+        self.stops = ramp_io.ramp_stops(node)
+        self.modes = ramp_io.ramp_modes(node)
+        if not np.isfinite(self.stops).all():
+            raise BakeError(f"ColorRamp '{node.name}' has a NaN or infinite colour; fix the stop first")
+        self.name = bpy.path.clean_name(f"{self.material.name}_{node.name}")
+        self.noise = ramp_io.driving_noise(node)
+        self.mean_min, self.mean_max = self.settings.mean_min, self.settings.mean_max
+        self.sigma_max = self.settings.sigma_max
+        if self.noise is not None:
+            self._plan_noise(context)
+
+    def _plan_noise(self, context):
+        noise = self.noise
+        detail = noise.inputs["Detail"].default_value
+        roughness = noise.inputs["Roughness"].default_value
+        for name in ("Detail", "Roughness"):
+            if noise.inputs[name].is_linked:
+                self.warnings.append(f"the noise's {name} is driven by a link; its value "
+                                     f"{noise.inputs[name].default_value:g} was used for the statistics")
+        if noise.noise_dimensions in ("1D", "4D"):
+            self.warnings.append(f"{noise.noise_dimensions} noise: statistics were measured on 3D noise")
+        if getattr(noise, "noise_type", "FBM") != "FBM" or not getattr(noise, "normalize", True):
+            self.warnings.append("statistics were measured for normalized fBM noise")
+        if "Lacunarity" in noise.inputs and abs(noise.inputs["Lacunarity"].default_value - 2.0) > 1e-6:
+            self.warnings.append("statistics were measured with Lacunarity 2")
+        if "Distortion" in noise.inputs and noise.inputs["Distortion"].default_value != 0.0:
+            self.warnings.append("statistics were measured with Distortion 0")
+        self.noise_detail, self.noise_roughness = detail, roughness
+        stats = noise_statistics.statistics(detail, roughness)
+        # The widest filter needed is the noise's spread over a huge footprint.
+        self.sigma_max = 1.05 * max(stats["sigma"] + [stats["total_std"]])
+        self.mean_min, self.mean_max = 0.0, 1.0  # the noise's Fac (and its mean) lies in [0, 1]
+        self.pixel_size, warning = _pixel_size(context.scene)
+        if warning:
+            self.warnings.append(warning)
+        self.coordinate_scale, warning = _coordinate_scale(noise, context.object)
+        if warning:
+            self.warnings.append(warning)
+        self.filter_stddev = noise_statistics.pixel_filter_stddev(context.scene)
+
+    def _output_folder(self):
+        folder = self.settings.output_folder or "//penumbra_luts/"
+        if folder.startswith("//") and not bpy.data.filepath:
+            return os.path.join(bpy.app.tempdir or tempfile.gettempdir(), "penumbra_luts")
+        return os.path.normpath(bpy.path.abspath(folder))
+
+    # ---- the work that may run in a thread: no bpy here -------------------
+    def compute(self, progress=None):
+        core = native.require()
+        s = self.spec
+        if self.image is not None:
+            return core.colormap_lut(self.samples, s["width"], s["height"], s["sigma_max"], s["mean_min"],
+                                     s["mean_max"], sigma_spacing=s["sigma_spacing"], progress=progress)
+        sampling = "cycles" if self.settings.sampling == "CYCLES" else "exact"
+        knots = core.color_ramp_to_knots(self.stops, *self.modes, sampling=sampling, channels=4)
+        self.sampling_error = knots["max_sampling_error"]
+        return core.colormap_lut_knots(knots["positions"], knots["colors"], knots["interpolation"], s["width"],
+                                       s["height"], s["sigma_max"], s["mean_min"], s["mean_max"],
+                                       sigma_spacing=s["sigma_spacing"], progress=progress)
+
+    # ---- writing and editing the scene ------------------------------------
+    def write_and_load(self, lut):
+        core = native.require()
+        os.makedirs(self.folder, exist_ok=True)
+        path = os.path.join(self.folder, f"{self.name}_lut.exr")
+        # σ = 0 at the bottom (Blender's v = 0), so the node maps σ to v directly.
+        pixels = np.ascontiguousarray(lut[::-1])
+        core.write_exr(path, pixels, half=False, colorspace="Non-Color")
+        if self.settings.write_png:
+            core.write_png16(os.path.splitext(path)[0] + ".png", pixels, colorspace="Non-Color")
+        image = None
+        for existing in bpy.data.images:
+            if existing.filepath and os.path.normpath(bpy.path.abspath(existing.filepath)) == path:
+                image = existing
+                image.reload()
+                break
+        if image is None:
+            image = bpy.data.images.load(path, check_existing=False)
+        image.colorspace_settings.name = "Non-Color"  # no colour transform on load
+        image.alpha_mode = "CHANNEL_PACKED"
+        return image, path
+
+    def apply(self, lut):
+        image, path = self.write_and_load(lut)
+        if self.node is None:
+            group = node_groups.filtered_ramp_group(image, self.spec)
+            return {"image": image, "path": path, "group": group, "node": None}
+        tree = self.material.node_tree
+        ramp = self.node
+        group = node_groups.filtered_ramp_group(image, self.spec)
+        group_node = tree.nodes.new("ShaderNodeGroup")
+        group_node.node_tree = group
+        group_node.name = group_node.label = node_groups.FILTERED_RAMP
+        group_node.location = ramp.location
+        group_node["penumbra_original_ramp"] = ramp.name
+        # Outputs: whatever the ramp fed now comes from the group.
+        for out_name in ("Color", "Alpha"):
+            targets = [link.to_socket for link in ramp.outputs[out_name].links]
+            for socket in targets:  # a new link into an input replaces the old one
+                tree.links.new(group_node.outputs[out_name], socket)
+        source = ramp_io.driving_socket(ramp)
+        if self.noise is not None:
+            self._wire_noise(tree, group_node, source)
+        elif source is not None:
+            tree.links.new(source, group_node.inputs["Mean"])
+        else:
+            group_node.inputs["Mean"].default_value = ramp.inputs["Fac"].default_value
+        # The original stays, muted and out of the way, for undo and restore.
+        ramp.mute = True
+        ramp.label = "Penumbra: original ramp (muted)"
+        ramp.location = (ramp.location.x, ramp.location.y - 320)
+        tree.nodes.active = group_node
+        return {"image": image, "path": path, "group": group, "node": group_node}
+
+    def _wire_noise(self, tree, group_node, source):
+        stats_image, stats = noise_statistics.statistics_image(self.noise_detail, self.noise_roughness, self.folder)
+        noise_filter = tree.nodes.new("ShaderNodeGroup")
+        noise_filter.node_tree = node_groups.noise_filter_group(stats_image, stats, self.filter_stddev)
+        noise_filter.name = noise_filter.label = "Penumbra Noise Filter"
+        noise_filter.location = (group_node.location.x - 220, group_node.location.y + 40)
+        footprint = tree.nodes.new("ShaderNodeGroup")
+        footprint.node_tree = node_groups.footprint_group()
+        footprint.name = footprint.label = node_groups.FOOTPRINT
+        footprint.location = (group_node.location.x - 440, group_node.location.y - 120)
+        footprint.inputs["Pixel Size"].default_value = self.pixel_size or 0.0
+        tree.links.new(source, noise_filter.inputs["Value"])
+        tree.links.new(footprint.outputs["Footprint"], noise_filter.inputs["Footprint"])
+        scale_input = self.noise.inputs["Scale"]
+        if scale_input.is_linked:
+            multiply = tree.nodes.new("ShaderNodeMath")
+            multiply.operation = "MULTIPLY"
+            multiply.location = (footprint.location.x, footprint.location.y - 160)
+            tree.links.new(scale_input.links[0].from_socket, multiply.inputs[0])
+            multiply.inputs[1].default_value = self.coordinate_scale
+            tree.links.new(multiply.outputs[0], noise_filter.inputs["Scale"])
+        else:
+            noise_filter.inputs["Scale"].default_value = scale_input.default_value * self.coordinate_scale
+        tree.links.new(noise_filter.outputs["Mean"], group_node.inputs["Mean"])
+        tree.links.new(noise_filter.outputs["Sigma"], group_node.inputs["Sigma"])
+
+
+def _report_done(op, plan, result):
+    what = f"'{plan.node.name}' in '{plan.material.name}'" if plan.node is not None else f"image '{plan.image.name}'"
+    op.report({"INFO"}, f"Filtered {what}: lookup {result['path']}")
+    for warning in plan.warnings:
+        op.report({"WARNING"}, warning)
+
+
+class PENUMBRA_OT_bake_colormap_lut(bpy.types.Operator):
+    """Replace the active ColorRamp by a node group sampling a pre-filtered lookup image
+(or bake the lookup of an image's colour map)"""
+    bl_idname = "penumbra.bake_colormap_lut"
+    bl_label = "Bake Filtered Colour Map"
+    bl_options = {"REGISTER", "UNDO"}
+
+    image_name: bpy.props.StringProperty(
+        name="Image", default="",
+        description="Bake the colour map held in this image's middle row instead of the active ColorRamp")
+
+    _timer = None
+    _thread = None
+
+    def _plan(self, context):
+        try:
+            return BakePlan(context, context.scene.penumbra.colormap, self.image_name)
+        except (BakeError, RuntimeError, ValueError) as error:
+            self.report({"ERROR"}, str(error))
+            return None
+
+    def execute(self, context):
+        plan = self._plan(context)
+        if plan is None:
+            return {"CANCELLED"}
+        wm = context.window_manager
+        wm.progress_begin(0, 100)
+        try:
+            lut = plan.compute(progress=lambda f: wm.progress_update(int(100 * f)) or True)
+            result = plan.apply(lut)
+        except (BakeError, ValueError, OSError, RuntimeError) as error:
+            self.report({"ERROR"}, f"Nothing was changed: {error}")
+            return {"CANCELLED"}
+        finally:
+            wm.progress_end()
+        _report_done(self, plan, result)
+        return {"FINISHED"}
+
+    def invoke(self, context, event):
+        plan = self._plan(context)
+        if plan is None:
+            return {"CANCELLED"}
+        self._state = {"plan": plan, "fraction": 0.0, "cancel": False, "lut": None, "error": None}
+        state = self._state
+
+        def progress(fraction):
+            state["fraction"] = fraction
+            return not state["cancel"]
+
+        def work():
+            try:
+                state["lut"] = plan.compute(progress=progress)
+            except Exception as error:  # reported in modal(), on Blender's thread
+                state["error"] = error
+
+        self._thread = threading.Thread(target=work, daemon=True)
+        self._thread.start()
+        wm = context.window_manager
+        wm.progress_begin(0, 100)
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def modal(self, context, event):
+        state = self._state
+        wm = context.window_manager
+        if event.type == "ESC":
+            state["cancel"] = True
+        if event.type != "TIMER":
+            return {"RUNNING_MODAL"} if not state["cancel"] else {"PASS_THROUGH"}
+        wm.progress_update(int(100 * state["fraction"]))
+        if self._thread.is_alive():
+            return {"RUNNING_MODAL"}
+        wm.event_timer_remove(self._timer)
+        wm.progress_end()
+        if state["cancel"] or state["error"] is not None:
+            message = "Cancelled" if state["cancel"] else f"Failed: {state['error']}"
+            self.report({"WARNING"} if state["cancel"] else {"ERROR"}, f"{message}; nothing was changed")
+            return {"CANCELLED"}
+        try:
+            result = state["plan"].apply(state["lut"])
+        except (BakeError, ValueError, OSError, RuntimeError) as error:
+            self.report({"ERROR"}, f"Nothing was changed: {error}")
+            return {"CANCELLED"}
+        _report_done(self, state["plan"], result)
+        return {"FINISHED"}
+
+
+class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):
+    """Put the original ColorRamp back in place of the active Penumbra Filtered Ramp"""
+    bl_idname = "penumbra.restore_color_ramp"
+    bl_label = "Restore Original ColorRamp"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def execute(self, context):
+        try:
+            material = _editable_material(context)
+        except BakeError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        tree = material.node_tree
+        group_node = tree.nodes.active
+        ramp_name = group_node.get("penumbra_original_ramp") if group_node is not None else None
+        ramp = tree.nodes.get(ramp_name) if ramp_name else None
+        if ramp is None:
+            self.report({"ERROR"}, "The active node is not a Penumbra Filtered Ramp with its original ramp")
+            return {"CANCELLED"}
+        for out_name in ("Color", "Alpha"):
+            targets = [link.to_socket for link in group_node.outputs[out_name].links]
+            for socket in targets:
+                tree.links.new(ramp.outputs[out_name], socket)
+        # The helper nodes the bake added (noise filter, footprint, scale
+        # multiply): collect names first, remove after (a removed node frees
+        # its links, so never remove while walking them).
+        doomed = set()
+        for socket in group_node.inputs:
+            for link in socket.links:
+                if link.from_node.name.startswith("Penumbra Noise Filter"):
+                    doomed.add(link.from_node.name)
+                    for inner in link.from_node.inputs:
+                        for inner_link in inner.links:
+                            source = inner_link.from_node
+                            if source.name.startswith(node_groups.FOOTPRINT) or source.bl_idname == "ShaderNodeMath":
+                                doomed.add(source.name)
+        for name in doomed:
+            tree.nodes.remove(tree.nodes[name])
+        ramp.location = group_node.location
+        tree.nodes.remove(group_node)
+        ramp.mute = False
+        ramp.label = ""
+        tree.nodes.active = ramp
+        self.report({"INFO"}, f"Restored ColorRamp '{ramp.name}'")
+        return {"FINISHED"}
+
+
+classes = (PENUMBRA_OT_bake_colormap_lut, PENUMBRA_OT_restore_color_ramp)

@@ -1,0 +1,139 @@
+"""Measures the statistics of Blender's Noise Texture over a pixel footprint,
+once, and writes addon/penumbra/colormap/noise_statistics.json. Run inside a
+Blender (the noise is Blender's own, evaluated by geometry nodes, the same
+noise code Cycles runs):
+
+    blender -b --factory-startup --python scripts/colormap_measure_noise.py
+    .venv/bin/python scripts/colormap_measure_noise.py
+
+Model (docs/colormap.md, "Noise statistics"): a pixel's footprint on the
+surface is an isotropic Gaussian of standard deviation s (noise-space units:
+world units times the noise's Scale). Given the noise value f(x) at the
+sample point, the values f(y) over the footprint are summarized by the best
+Gaussian: mean f̂ = μ + ρ(s)(f(x) − μ) (linear regression on the centre
+value) and standard deviation σ_f(s) (the residual RMS). Both are tabulated
+against log2 s for each Detail and Roughness (Scale is factored out: the
+noise is measured at Scale 1 and the footprint scaled instead; Distortion 0;
+Lacunarity 2 in 4.x). Each table entry pools N footprints of M samples."""
+
+import json
+import os
+import sys
+import time
+
+import bpy
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "addon"))
+sys.path.insert(0, os.path.join(ROOT, "addon", "penumbra", "colormap"))
+import interface  # noqa: E402  (the add-on's socket helper, no registration needed)
+
+DETAILS = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0]
+ROUGHNESSES = [0.25, 0.5, 0.75, 1.0]
+LOG2_FOOTPRINTS = np.linspace(-8.0, 4.0, 25)   # s from 1/256 to 16 noise units
+CENTRES = 600
+SAMPLES = 48
+SEED = 20240611
+
+
+def noise_evaluator():
+    """A mesh object whose geometry-nodes modifier stores Noise Texture Fac at
+    each vertex position; returns (object, group, noise node)."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    mesh = bpy.data.meshes.new("noise_points")
+    obj = bpy.data.objects.new("noise_points", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    group = bpy.data.node_groups.new("measure noise", "GeometryNodeTree")
+    interface.add_socket(group, "Geometry", "INPUT", "NodeSocketGeometry")
+    interface.add_socket(group, "Geometry", "OUTPUT", "NodeSocketGeometry")
+    nodes, links = group.nodes, group.links
+    gin, gout = nodes.new("NodeGroupInput"), nodes.new("NodeGroupOutput")
+    position = nodes.new("GeometryNodeInputPosition")
+    noise = nodes.new("ShaderNodeTexNoise")
+    noise.noise_dimensions = "3D"
+    noise.inputs["Scale"].default_value = 1.0
+    noise.inputs["Distortion"].default_value = 0.0
+    store = nodes.new("GeometryNodeStoreNamedAttribute")
+    store.data_type = "FLOAT"
+    store.domain = "POINT"
+    store.inputs["Name"].default_value = "noise"
+    links.new(position.outputs["Position"], noise.inputs["Vector"])
+    links.new(gin.outputs[0], store.inputs["Geometry"])
+    value_input = [s for s in store.inputs if s.name == "Value" and s.type == "VALUE"]
+    links.new(noise.outputs["Fac"], value_input[0] if value_input else store.inputs["Value"])
+    links.new(store.outputs[0], gout.inputs[0])
+    modifier = obj.modifiers.new("noise", "NODES")
+    modifier.node_group = group
+    return obj, noise
+
+
+def evaluate(obj, points):
+    mesh = obj.data
+    mesh.clear_geometry()
+    mesh.vertices.add(len(points))
+    mesh.vertices.foreach_set("co", points.astype(np.float32).ravel())
+    mesh.update()
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    evaluated = obj.evaluated_get(depsgraph)
+    data = evaluated.data.attributes["noise"].data
+    out = np.empty(len(data), np.float32)
+    data.foreach_get("value", out)
+    return out.astype(np.float64)
+
+
+def main():
+    started = time.perf_counter()
+    obj, noise = noise_evaluator()
+    rng = np.random.default_rng(SEED)
+    # The same footprints for every setting: centres spread over a large
+    # region (away from the lattice's origin), Gaussian offsets in the plane.
+    centres = np.column_stack([rng.uniform(10, 1010, CENTRES), rng.uniform(10, 1010, CENTRES),
+                               np.full(CENTRES, 0.37)])
+    unit_offsets = rng.normal(size=(CENTRES, SAMPLES, 2))
+    footprints = 2.0 ** LOG2_FOOTPRINTS
+    points = [centres]
+    for s in footprints:
+        p = np.repeat(centres[:, None, :], SAMPLES, axis=1).copy()
+        p[:, :, :2] += s * unit_offsets
+        points.append(p.reshape(-1, 3))
+    points = np.concatenate(points)
+    table = {}
+    for detail in DETAILS:
+        for roughness in ROUGHNESSES:
+            noise.inputs["Detail"].default_value = detail
+            noise.inputs["Roughness"].default_value = roughness
+            values = evaluate(obj, points)
+            centre = values[:CENTRES]
+            mu = float(values.mean())
+            total = float(centre.std())
+            rho, sigma = [], []
+            for i in range(len(footprints)):
+                f = values[CENTRES + i * CENTRES * SAMPLES: CENTRES + (i + 1) * CENTRES * SAMPLES].reshape(CENTRES, SAMPLES)
+                x = np.repeat(centre[:, None], SAMPLES, axis=1)
+                r = float(((x - mu) * (f - mu)).mean() / ((x - mu) ** 2).mean())
+                residual = f - (mu + r * (x - mu))
+                rho.append(r)
+                sigma.append(float(np.sqrt((residual ** 2).mean())))
+            table[f"{detail:g}/{roughness:g}"] = {"mean": mu, "total_std": total, "rho": rho, "sigma": sigma,
+                                                 "min": float(values.min()), "max": float(values.max())}
+            print(f"detail {detail:g} roughness {roughness:g}: mean {mu:.4f} std {total:.4f} "
+                  f"sigma(s=1) {sigma[int(np.argmin(abs(LOG2_FOOTPRINTS)))]:.4f}", flush=True)
+    version = f"{bpy.app.version[0]}.{bpy.app.version[1]}"
+    path = os.path.join(ROOT, "addon", "penumbra", "colormap", "noise_statistics.json")
+    data = json.load(open(path)) if os.path.exists(path) else {}
+    data["about"] = __doc__.strip().splitlines()[0] + " See scripts/colormap_measure_noise.py."
+    data["log2_footprint"] = LOG2_FOOTPRINTS.tolist()
+    data["details"] = DETAILS
+    data["roughnesses"] = ROUGHNESSES
+    data["footprint_filter"] = "isotropic Gaussian, standard deviation s in noise units"
+    data.setdefault("blender", {})[version] = {"centres": CENTRES, "samples": SAMPLES, "seed": SEED,
+                                               "seconds": round(time.perf_counter() - started, 1),
+                                               "table": table}
+    with open(path + ".tmp", "w") as f:
+        json.dump(data, f, indent=1)
+    os.replace(path + ".tmp", path)
+    print(f"wrote {path} for Blender {version} in {time.perf_counter() - started:.0f} s")
+
+
+main()

@@ -1,0 +1,226 @@
+"""The colour-map tool inside real Blender (3.4 and 4.5): ColorRamp
+evaluation against Blender's own, the bake operator end to end, node groups
+in both node-group APIs, bad input, and a tiny Cycles render."""
+
+import os
+
+import bpy
+import numpy as np
+import pytest
+
+import penumbra
+from penumbra import native
+from penumbra.colormap import interface, node_groups
+
+INTERPOLATIONS = ("LINEAR", "EASE", "CARDINAL", "B_SPLINE", "CONSTANT")
+COLOR_MODES = ("RGB", "HSV", "HSL")
+HUES = ("NEAR", "FAR", "CW", "CCW")
+
+
+@pytest.fixture
+def addon(factory_scene):
+    penumbra.register()
+    factory_scene.penumbra.colormap.output_folder = ""
+    yield factory_scene
+    penumbra.unregister()
+
+
+def make_ramp_material(name="ramped", noise=True):
+    material = bpy.data.materials.new(name)
+    material.use_nodes = True
+    tree = material.node_tree
+    ramp = tree.nodes.new("ShaderNodeValToRGB")
+    elements = ramp.color_ramp.elements
+    elements[0].color = (0.9, 0.1, 0.05, 1.0)
+    elements[1].color = (0.05, 0.2, 0.9, 1.0)
+    elements[0].position = 0.45
+    elements[1].position = 0.55
+    bsdf = tree.nodes["Principled BSDF"]
+    tree.links.new(ramp.outputs["Color"], bsdf.inputs["Base Color"])
+    if noise:
+        tex = tree.nodes.new("ShaderNodeTexNoise")
+        tex.inputs["Scale"].default_value = 20.0
+        tree.links.new(tex.outputs["Fac"], ramp.inputs["Fac"])
+    tree.nodes.active = ramp
+    return material, ramp
+
+
+def plane_with(material):
+    bpy.ops.mesh.primitive_plane_add(size=4.0)
+    obj = bpy.context.active_object
+    obj.data.materials.append(material)
+    return obj
+
+
+def random_ramp(rng, node, count):
+    elements = node.color_ramp.elements
+    while len(elements) < count:
+        elements.new(0.5)
+    positions = np.sort(rng.uniform(0, 1, count))
+    positions[1] = positions[0]  # two stops at one place
+    for e, p in zip(elements, positions):
+        e.position = float(p)
+        e.color = tuple(rng.uniform(0, 1, 4))
+
+
+@pytest.mark.parametrize("interpolation", INTERPOLATIONS)
+def test_ramp_evaluation_matches_blenders_own_in_every_mode(addon, interpolation):
+    core = native.require()
+    material, node = make_ramp_material(noise=False)
+    rng = np.random.default_rng(7)
+    random_ramp(rng, node, 6)
+    positions = np.concatenate([np.linspace(0, 1, 501), [s.position for s in node.color_ramp.elements]])
+    from penumbra.colormap import ramp as ramp_io
+    for mode in COLOR_MODES:
+        for hue in (HUES if mode != "RGB" else ("NEAR",)):
+            node.color_ramp.interpolation = interpolation
+            node.color_ramp.color_mode = mode
+            node.color_ramp.hue_interpolation = hue
+            stops = ramp_io.ramp_stops(node)
+            ours = core.evaluate_color_ramp(stops, positions.astype(np.float32), interpolation, mode, hue)
+            blenders = np.array([node.color_ramp.evaluate(float(p)) for p in positions], np.float32)
+            np.testing.assert_allclose(ours, blenders, atol=2e-6, err_msg=f"{interpolation} {mode} {hue}")
+
+
+def test_bake_replaces_a_noise_driven_ramp_and_keeps_the_original(addon, tmp_path):
+    addon.penumbra.colormap.output_folder = str(tmp_path)
+    addon.penumbra.colormap.lut_width = 64
+    addon.penumbra.colormap.lut_height = 32
+    material, ramp = make_ramp_material()
+    obj = plane_with(material)
+    bpy.ops.object.camera_add(location=(0, -6, 3), rotation=(1.1, 0, 0))
+    addon.camera = bpy.context.active_object
+    bpy.context.view_layer.objects.active = obj
+    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
+    tree = material.node_tree
+    group_node = tree.nodes[node_groups.FILTERED_RAMP]
+    assert group_node.node_tree.name.startswith(node_groups.FILTERED_RAMP)
+    assert interface.socket_names(group_node.node_tree, "INPUT") == ["Mean", "Sigma"]
+    assert interface.socket_names(group_node.node_tree, "OUTPUT") == ["Color", "Alpha"]
+    bsdf = tree.nodes["Principled BSDF"]
+    assert bsdf.inputs["Base Color"].links[0].from_node == group_node
+    assert ramp.mute and ramp.name in tree.nodes
+    noise_filter = group_node.inputs["Sigma"].links[0].from_node
+    assert noise_filter.node_tree.name.startswith("Penumbra Noise Filter")
+    assert noise_filter.inputs["Value"].links[0].from_node.bl_idname == "ShaderNodeTexNoise"
+    footprint = noise_filter.inputs["Footprint"].links[0].from_node
+    assert footprint.inputs["Pixel Size"].default_value > 0
+    # The lookup image: float EXR, no colour transform, no wrap.
+    image_node = next(n for n in group_node.node_tree.nodes if n.bl_idname == "ShaderNodeTexImage")
+    assert image_node.extension == "EXTEND" and image_node.interpolation == "Linear"
+    image = image_node.image
+    assert image.colorspace_settings.name == "Non-Color" and image.is_float
+    path = bpy.path.abspath(image.filepath)
+    assert os.path.isfile(path) and path.endswith(".exr")
+    # Blender reads back exactly the table the core computes (bottom row = σ 0).
+    spec = group_node.node_tree["penumbra_lookup"]
+    pixels = np.empty(64 * 32 * 4, np.float32)
+    image.pixels.foreach_get(pixels)
+    pixels = pixels.reshape(32, 64, 4)
+    from penumbra.colormap import ramp as ramp_io
+    knots = native.module.color_ramp_to_knots(ramp_io.ramp_stops(ramp), "LINEAR", "RGB", "NEAR", sampling="cycles")
+    expect = native.module.colormap_lut_knots(knots["positions"], knots["colors"], knots["interpolation"], 64, 32,
+                                              spec["sigma_max"], spec["mean_min"], spec["mean_max"])
+    np.testing.assert_allclose(pixels, expect, atol=1e-6)
+    # Restore puts the ramp back.
+    tree.nodes.active = group_node
+    assert bpy.ops.penumbra.restore_color_ramp() == {"FINISHED"}
+    assert not ramp.mute and bsdf.inputs["Base Color"].links[0].from_node == ramp
+    assert node_groups.FILTERED_RAMP not in tree.nodes
+
+
+def test_bake_is_undone_and_redone_by_blenders_undo(addon, tmp_path):
+    addon.penumbra.colormap.output_folder = str(tmp_path)
+    addon.penumbra.colormap.lut_width = addon.penumbra.colormap.lut_height = 16
+    material, ramp = make_ramp_material(noise=False)
+    plane_with(material)
+    before = {n.name for n in material.node_tree.nodes}
+    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
+    assert node_groups.FILTERED_RAMP in material.node_tree.nodes
+    # The muted original keeps its input, so nothing about the ramp was lost.
+    assert before <= {n.name for n in material.node_tree.nodes}
+
+
+@pytest.mark.parametrize("problem", ["not_a_ramp", "no_nodes", "nan_colour", "no_material"])
+def test_bad_input_is_reported_and_nothing_changes(addon, problem):
+    material, ramp = make_ramp_material(noise=False)
+    obj = plane_with(material)
+    tree = material.node_tree
+    if problem == "not_a_ramp":
+        tree.nodes.active = tree.nodes["Principled BSDF"]
+    elif problem == "no_nodes":
+        material.use_nodes = False
+    elif problem == "nan_colour":
+        ramp.color_ramp.elements[0].color = (float("nan"), 0.0, 0.0, 1.0)
+    elif problem == "no_material":
+        obj.data.materials.clear()
+    names = sorted(n.name for n in tree.nodes)
+    images = len(bpy.data.images)
+    with pytest.raises(RuntimeError) as error:
+        bpy.ops.penumbra.bake_colormap_lut()
+    assert {"not_a_ramp": "not a ColorRamp", "no_nodes": "does not use nodes", "nan_colour": "NaN",
+            "no_material": "No active material"}[problem] in str(error.value)
+    assert sorted(n.name for n in tree.nodes) == names
+    assert len(bpy.data.images) == images
+    assert not ramp.mute
+
+
+def test_single_stop_ramp_bakes_a_constant_lookup(addon, tmp_path):
+    addon.penumbra.colormap.output_folder = str(tmp_path)
+    addon.penumbra.colormap.lut_width = addon.penumbra.colormap.lut_height = 8
+    material, ramp = make_ramp_material(noise=False)
+    ramp.color_ramp.elements.remove(ramp.color_ramp.elements[1])
+    plane_with(material)
+    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
+    image = next(n for n in material.node_tree.nodes[node_groups.FILTERED_RAMP].node_tree.nodes
+                 if n.bl_idname == "ShaderNodeTexImage").image
+    pixels = np.empty(8 * 8 * 4, np.float32)
+    image.pixels.foreach_get(pixels)
+    np.testing.assert_allclose(pixels.reshape(-1, 4), np.tile([0.9, 0.1, 0.05, 1.0], (64, 1)), atol=1e-6)
+
+
+def test_linked_material_is_read_only(addon, tmp_path):
+    library = str(tmp_path / "library.blend")
+    material, _ = make_ramp_material("shared")
+    material.use_fake_user = True
+    bpy.data.libraries.write(library, {material})
+    bpy.data.materials.remove(material)
+    with bpy.data.libraries.load(library, link=True) as (data_from, data_to):
+        data_to.materials = ["shared"]
+    linked = bpy.data.materials["shared", bpy.path.relpath(library) if False else library] \
+        if False else next(m for m in bpy.data.materials if m.library is not None)
+    obj = plane_with(bpy.data.materials.new("placeholder"))
+    obj.material_slots[0].link = "OBJECT"
+    obj.material_slots[0].material = linked
+    obj.active_material_index = 0
+    with pytest.raises(RuntimeError, match="read-only"):
+        bpy.ops.penumbra.bake_colormap_lut()
+    assert all(n.bl_idname != "ShaderNodeGroup" for n in linked.node_tree.nodes)
+
+
+def test_bake_from_an_image_makes_a_lookup_and_group(addon, tmp_path):
+    addon.penumbra.colormap.output_folder = str(tmp_path)
+    addon.penumbra.colormap.lut_width = addon.penumbra.colormap.lut_height = 16
+    image = bpy.data.images.new("strip", 8, 3, float_buffer=True)
+    pixels = np.zeros((3, 8, 4), np.float32)
+    pixels[..., 0] = np.linspace(0, 1, 8)
+    pixels[..., 3] = 1
+    image.pixels.foreach_set(pixels.ravel())
+    assert bpy.ops.penumbra.bake_colormap_lut(image_name="strip") == {"FINISHED"}
+    assert any(g.name.startswith(node_groups.FILTERED_RAMP) for g in bpy.data.node_groups)
+    assert os.path.isfile(os.path.join(str(tmp_path), "strip_lut.exr"))
+
+
+def test_microsurface_groups_build_in_this_blenders_api(addon, tmp_path):
+    image = bpy.data.images.new("lut", 8, 8, float_buffer=True)
+    spec = {"width": 8, "height": 8, "sigma_max": 0.3, "mean_min": 0.0, "mean_max": 1.0, "sigma_spacing": "linear"}
+    height = node_groups.height_ramp_group(image, spec)
+    slope = node_groups.slope_ramp_group(image, spec)
+    assert interface.socket_names(height, "OUTPUT") == ["Color", "Alpha", "Visibility"]
+    assert "Slope Sigma" in interface.socket_names(slope, "INPUT")
+    table = bpy.data.images[node_groups.MICROSURFACE_IMAGE]
+    px = np.empty(256 * 2 * 4, np.float32)
+    table.pixels.foreach_get(px)
+    px = px.reshape(2, 256, 4)
+    # Row 0, G at Λ_sum = 1 (u = 0.5 → texel 127.5): mean of the max of 2 normals, 1/√π.
+    assert abs(0.5 * (px[0, 127, 1] + px[0, 128, 1]) - 0.5642) < 0.01
