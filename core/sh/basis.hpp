@@ -1,7 +1,7 @@
 // The real spherical-harmonic (SH) basis every other part of Penumbra speaks:
 // visibility, lighting and BRDF operators are all vectors or matrices in it.
 //
-// Convention (the only place it is written down; see docs/sh-contract.md)
+// Convention (the only place it is written down)
 // ------------------------------------------------------------------------
 // Order n: bands l < n, n² coefficients, index i = l(l+1)+m. Real orthonormal
 // SH, no Condon–Shortley phase:

@@ -1,0 +1,569 @@
+// Batched pose shading (header: the conventions and models; docs/sh-engine.md:
+// the derivation and measurements).
+//
+// Layout of the hot loop: vertices go in batches of kLanes, one SIMD register
+// of doubles for the target being built (2 with SSE, 4 with AVX, 8 with
+// AVX-512). Every per-vertex quantity is such a lane vector (GCC/Clang vector
+// extensions), so every step is the same straight-line arithmetic on all
+// lanes with constants (T, X, lighting) shared by the batch, and validity is
+// a lane mask instead of a branch.
+// All arithmetic is double. The order is a template parameter for orders 1–8
+// (fully unrolled) and a runtime value above.
+#include "sh/pose_shading.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <system_error>
+#include <thread>
+#include <type_traits>
+
+#include <Eigen/Geometry>
+
+#include "common/error.hpp"
+#include "sh/basis.hpp"
+#include "sh/rotation.hpp"
+
+namespace penumbra::sh {
+namespace detail {
+
+// Everything a call shares between vertices.
+struct PoseShadingSetup {
+    int order = 0;
+    int lobes = 1;
+    ShadingModel model = ShadingModel::diffuse;
+    Eigen::Vector3d camera = Eigen::Vector3d::Zero();
+    bool want_visibility = false;
+    // T per |m|: block a is (order−a)², row-major, at block_offset[a].
+    std::array<int, max_order> block_offset{};
+    std::vector<double> blocks;
+    // X = D(Rx(90°)) and Xᵀ, non-zero entries by row.
+    std::vector<int> x_rows, x_columns, xt_rows, xt_columns;
+    std::vector<double> x_values, xt_values;
+    // lighting[i][c], and for translucency the back lobe folded into it:
+    // back[i][c] = transmission_c (−1)^l sqrt(4π/(2l+1)) h_l lighting[i][c].
+    std::vector<std::array<double, 3>> lighting;
+    std::vector<std::array<double, 3>> back;
+    std::array<double, max_order> zh_scale{};        // sqrt(4π/(2l+1)), Eq. 1
+    std::array<double, max_order> ao_weight{};       // √(4π) T_d[00, l0]
+    // Coefficients of the normalized Legendre recurrence of sh/basis.cpp,
+    // p̄_mm = diagonal[m], p̄_(m+1)m = first[m] z p̄_mm,
+    // p̄_lm = a_lm (z p̄_(l−1)m − b_lm p̄_(l−2)m).
+    std::array<double, max_order> diagonal{}, first{};
+    std::array<double, max_order * max_order> a{}, b{};
+};
+
+}  // namespace detail
+
+namespace {
+
+using detail::PoseShadingSetup;
+
+// One lane vector = one SIMD register of doubles for the target being built:
+// wider vectors are split by the compiler into pieces that go through memory,
+// which measured 1.6x slower (docs/sh-engine.md).
+#if defined(__AVX512F__)
+constexpr int kLanes = 8;
+#elif defined(__AVX__)
+constexpr int kLanes = 4;
+#else
+constexpr int kLanes = 2;
+#endif
+
+typedef double VecD __attribute__((vector_size(kLanes * sizeof(double))));
+typedef long long MaskD __attribute__((vector_size(kLanes * sizeof(double))));
+
+inline VecD splat(double value) {
+    VecD v{};
+    for (int k = 0; k < kLanes; ++k) v[k] = value;
+    return v;
+}
+
+inline VecD sqrt_lanes(const VecD& x) {
+    VecD r{};
+    for (int k = 0; k < kLanes; ++k) r[k] = std::sqrt(x[k]);
+    return r;
+}
+
+inline MaskD finite(const VecD& x) { return x - x == 0.0; }  // false for NaN and ±inf
+
+// (x, y, z) ← unit vector in lanes where it is finite and its squared length
+// lies in (1e-300, inf) (lengths between ~1e-150 and ~1e154; anything else
+// counts as zero or non-finite); returns that mask and sets (x, y, z) to the
+// fallback in the other lanes.
+inline MaskD normalize_lanes(VecD& x, VecD& y, VecD& z, double fx, double fy, double fz) {
+    const VecD squared = x * x + y * y + z * z;
+    const MaskD ok = finite(squared) & (squared > 1e-300);
+    const VecD inverse_length = 1.0 / sqrt_lanes(ok ? squared : splat(1.0));
+    x = ok ? x * inverse_length : splat(fx);
+    y = ok ? y * inverse_length : splat(fy);
+    z = ok ? z * inverse_length : splat(fz);
+    return ok;
+}
+
+// Same with per-lane fallbacks.
+inline MaskD normalize_lanes(VecD& x, VecD& y, VecD& z, const VecD& fx, const VecD& fy, const VecD& fz) {
+    const VecD squared = x * x + y * y + z * z;
+    const MaskD ok = finite(squared) & (squared > 1e-300);
+    const VecD inverse_length = 1.0 / sqrt_lanes(ok ? squared : splat(1.0));
+    x = ok ? x * inverse_length : fx;
+    y = ok ? y * inverse_length : fy;
+    z = ok ? z * inverse_length : fz;
+    return ok;
+}
+
+// y_i(x, y, z) for unit directions in every lane: the Cartesian recurrence of
+// sh/basis.cpp (Legendre in z, then (x + iy)^m).
+template <int kOrder>
+inline void eval_lanes(const PoseShadingSetup& setup, const VecD& x, const VecD& y, const VecD& z,
+                       VecD* out) {
+    const int order = kOrder ? kOrder : setup.order;
+    for (int m = 0; m < order; ++m) {
+        out[sh_index(m, m)] = splat(setup.diagonal[m]);
+        if (m + 1 >= order) break;
+        out[sh_index(m + 1, m)] = setup.first[m] * z * setup.diagonal[m];
+        for (int l = m + 2; l < order; ++l) {
+            const int i = sh_index(l, m);
+            out[i] = setup.a[i] * (z * out[sh_index(l - 1, m)] - setup.b[i] * out[sh_index(l - 2, m)]);
+        }
+    }
+    // C_m + i S_m = (x + iy)^m.
+    VecD c = splat(1.0), s = splat(0.0);
+    const double sqrt2 = std::numbers::sqrt2;
+    for (int m = 1; m < order; ++m) {
+        const VecD c_next = x * c - y * s;
+        s = x * s + y * c;
+        c = c_next;
+        const VecD sc = sqrt2 * c, ss = sqrt2 * s;
+        for (int l = m; l < order; ++l) {
+            const VecD p = out[sh_index(l, m)];
+            out[sh_index(l, -m)] = p * ss;
+            out[sh_index(l, m)] = p * sc;
+        }
+    }
+}
+
+// In place: coefficients of f turned by Rz(α) (g(ω) = f(Rz(α)ᵀ ω)), per lane
+// with (cos α, sin α) = (c, s): (p, q) = (w_lm, w_l,−m) →
+// (p cos mα − q sin mα, p sin mα + q cos mα).
+template <int kOrder>
+inline void rotate_z_lanes(int order_runtime, const VecD& c, const VecD& s, VecD* w) {
+    const int order = kOrder ? kOrder : order_runtime;
+    VecD cm = c, sm = s;
+    for (int m = 1; m < order; ++m) {
+        if (m > 1) {
+            const VecD c_next = cm * c - sm * s;
+            sm = sm * c + cm * s;
+            cm = c_next;
+        }
+        for (int l = m; l < order; ++l) {
+            const VecD p = w[sh_index(l, m)], q = w[sh_index(l, -m)];
+            w[sh_index(l, m)] = p * cm - q * sm;
+            w[sh_index(l, -m)] = p * sm + q * cm;
+        }
+    }
+}
+
+// out = X in, X given by its non-zero entries (24 of 84 at order 4).
+template <int kOrder>
+inline void quarter_turn_lanes(int order_runtime, const std::vector<int>& rows, const std::vector<int>& columns,
+                               const std::vector<double>& values, const VecD* in, VecD* out) {
+    const int order = kOrder ? kOrder : order_runtime;
+    for (int i = 0; i < order * order; ++i) out[i] = splat(0.0);
+    const std::size_t count = values.size();
+    for (std::size_t e = 0; e < count; ++e) out[rows[e]] += values[e] * in[columns[e]];
+}
+
+// Shades vertices [begin, end).
+template <typename Real, int kOrder>
+void shade_range(const PoseShadingSetup& setup, const PoseBuffers<Real>& buffers, std::size_t begin,
+                 std::size_t end, std::size_t& invalid_count) {
+    const int order = kOrder ? kOrder : setup.order;
+    constexpr int kBands = kOrder ? kOrder : max_order;
+    const int coefficients = order * order;
+    const int lobes = setup.lobes;
+    const bool phong = setup.model == ShadingModel::phong;
+    const bool translucent = setup.model == ShadingModel::translucent;
+
+    VecD v[kBands * kBands], y[kBands * kBands], u[kBands * kBands];
+    VecD normal_zonal[kBands];  // phong visibility output: v_l0 in the normal frame
+    VecD band[kBands] = {};
+
+    for (std::size_t start = begin; start < end; start += kLanes) {
+        const int count = int(std::min<std::size_t>(kLanes, end - start));
+        const auto vertex_of = [&](int k) { return start + std::min(k, count - 1); };  // partial batch: repeat
+
+        // Frames: n, t, b.
+        VecD nx{}, ny{}, nz{}, tx{}, ty{}, tz{};
+        for (int k = 0; k < kLanes; ++k) {
+            const std::size_t vertex = vertex_of(k);
+            const Real* np = buffers.normals + 3 * vertex;
+            const Real* tp = buffers.tangents + 3 * vertex;
+            nx[k] = double(np[0]); ny[k] = double(np[1]); nz[k] = double(np[2]);
+            tx[k] = double(tp[0]); ty[k] = double(tp[1]); tz[k] = double(tp[2]);
+        }
+        MaskD valid = normalize_lanes(nx, ny, nz, 0.0, 0.0, 1.0);
+        // Gram–Schmidt; a tangent within 1e-6 rad of n leaves nothing usable.
+        valid &= normalize_lanes(tx, ty, tz, 1.0, 0.0, 0.0);
+        const VecD along = tx * nx + ty * ny + tz * nz;
+        tx -= along * nx; ty -= along * ny; tz -= along * nz;
+        valid &= tx * tx + ty * ty + tz * tz > 1e-12;
+        valid &= normalize_lanes(tx, ty, tz, 1.0, 0.0, 0.0);
+        nx = valid ? nx : splat(0.0); ny = valid ? ny : splat(0.0); nz = valid ? nz : splat(1.0);
+        tx = valid ? tx : splat(1.0); ty = valid ? ty : splat(0.0); tz = valid ? tz : splat(0.0);
+        const VecD bx = ny * tz - nz * ty, by = nz * tx - nx * tz, bz = nx * ty - ny * tx;
+
+        // z' = n, or for Phong r = 2(n·w) n − w, w = normalize(camera − position),
+        // clamped to the horizon when n·w < 0; r = n where w or the clamp is undefined.
+        VecD zx = nx, zy = ny, zz = nz;
+        if (phong) {
+            VecD wx{}, wy{}, wz{};
+            for (int k = 0; k < kLanes; ++k) {
+                const Real* pp = buffers.positions + 3 * vertex_of(k);
+                wx[k] = setup.camera.x() - double(pp[0]);
+                wy[k] = setup.camera.y() - double(pp[1]);
+                wz[k] = setup.camera.z() - double(pp[2]);
+            }
+            const MaskD position_ok = finite(wx) & finite(wy) & finite(wz);
+            valid &= position_ok;
+            const MaskD has_view = normalize_lanes(wx, wy, wz, nx, ny, nz) & position_ok;
+            const VecD cosine = nx * wx + ny * wy + nz * wz;
+            VecD hx = wx - cosine * nx, hy = wy - cosine * ny, hz = wz - cosine * nz;
+            const MaskD horizon = (hx * hx + hy * hy + hz * hz > 1e-24) & normalize_lanes(hx, hy, hz, nx, ny, nz);
+            const MaskD behind = cosine < 0.0;
+            VecD rx = 2.0 * cosine * nx - wx, ry = 2.0 * cosine * ny - wy, rz = 2.0 * cosine * nz - wz;
+            rx = behind ? (horizon ? -hx : nx) : rx;
+            ry = behind ? (horizon ? -hy : ny) : ry;
+            rz = behind ? (horizon ? -hz : nz) : rz;
+            normalize_lanes(rx, ry, rz, nx, ny, nz);
+            zx = has_view ? rx : nx;
+            zy = has_view ? ry : ny;
+            zz = has_view ? rz : nz;
+        }
+
+        // F' = Rz(φ) Ry(θ) with F' e_z = z': columns e1' = (cφ cθ, sφ cθ, −sθ),
+        // e2' = (−sφ, cφ, 0), e3' = z'; at the poles φ is free (0).
+        const VecD ct = zz, st = sqrt_lanes(zx * zx + zy * zy);
+        const MaskD pole = !(st > 0.0);
+        const VecD inverse_st = 1.0 / (pole ? splat(1.0) : st);
+        const VecD cp = pole ? splat(1.0) : zx * inverse_st, sp = pole ? splat(0.0) : zy * inverse_st;
+        // M = F'ᵀ F: local (t, b, n) coordinates → F' coordinates.
+        const VecD e1x = cp * ct, e1y = sp * ct, e1z = -st;
+        const VecD e3x = cp * st, e3y = sp * st, e3z = ct;
+        const VecD m00 = e1x * tx + e1y * ty + e1z * tz, m01 = e1x * bx + e1y * by + e1z * bz,
+                   m02 = e1x * nx + e1y * ny + e1z * nz;
+        const VecD m10 = cp * ty - sp * tx, m11 = cp * by - sp * bx, m12 = cp * ny - sp * nx;
+        const VecD m20 = e3x * tx + e3y * ty + e3z * tz, m21 = e3x * bx + e3y * by + e3z * bz,
+                   m22 = e3x * nx + e3y * ny + e3z * nz;
+
+        // Steps 2–3: lobes into F', ZH → SH (Eq. 1).
+        for (int i = 0; i < coefficients; ++i) v[i] = splat(0.0);
+        for (int l = 0; l < order; ++l) normal_zonal[l] = splat(0.0);
+        for (int lobe = 0; lobe < lobes; ++lobe) {
+            VecD ax{}, ay{}, az{};
+            for (int k = 0; k < kLanes; ++k) {
+                const std::size_t at = vertex_of(k) * lobes + lobe;
+                const Real* a = buffers.lobe_axes + 3 * at;
+                const Real* g = buffers.lobe_bands + order * at;
+                ax[k] = double(a[0]); ay[k] = double(a[1]); az[k] = double(a[2]);
+                for (int l = 0; l < order; ++l) band[l][k] = double(g[l]);
+            }
+            MaskD bands_finite = finite(band[0]), bands_zero = band[0] == 0.0;
+            for (int l = 1; l < order; ++l) {
+                bands_finite &= finite(band[l]);
+                bands_zero &= band[l] == 0.0;
+            }
+            const MaskD axis_ok = normalize_lanes(ax, ay, az, 0.0, 0.0, 1.0);
+            // A zero axis with zero bands is an unused lobe; anything else that
+            // is zero or non-finite makes the vertex invalid.
+            valid &= bands_finite & (axis_ok | bands_zero);
+            const MaskD use = axis_ok & bands_finite & valid;
+            for (int l = 0; l < order; ++l) band[l] = use ? band[l] : splat(0.0);
+            const VecD x = m00 * ax + m01 * ay + m02 * az;
+            const VecD yy = m10 * ax + m11 * ay + m12 * az;
+            const VecD z = m20 * ax + m21 * ay + m22 * az;
+            eval_lanes<kOrder>(setup, x, yy, z, y);
+            for (int l = 0; l < order; ++l) {
+                const VecD scale = setup.zh_scale[l] * band[l];
+                for (int m = -l; m <= l; ++m) v[sh_index(l, m)] += scale * y[sh_index(l, m)];
+            }
+            if (setup.want_visibility && phong) {
+                // v_l0 in the normal frame depends on the local axis' z only:
+                // y_l0 = p̄_l0(z), the m = 0 Legendre recurrence.
+                const VecD& zn = az;
+                VecD before = splat(setup.diagonal[0]), last = splat(0.0);
+                normal_zonal[0] += setup.zh_scale[0] * band[0] * before;
+                if (order > 1) {
+                    last = setup.first[0] * zn * before;
+                    normal_zonal[1] += setup.zh_scale[1] * band[1] * last;
+                }
+                for (int l = 2; l < order; ++l) {
+                    const int i = sh_index(l, 0);
+                    const VecD next = setup.a[i] * (zn * last - setup.b[i] * before);
+                    normal_zonal[l] += setup.zh_scale[l] * band[l] * next;
+                    before = last;
+                    last = next;
+                }
+            }
+        }
+
+        // Step 4: u = T v, block by block over m.
+        for (int m = -(order - 1); m < order; ++m) {
+            const int a = std::abs(m), size = order - a;
+            const double* block = setup.blocks.data() + setup.block_offset[a];
+            for (int l = 0; l < size; ++l) {
+                VecD sum = block[l * size] * v[sh_index(a, m)];
+                for (int lp = 1; lp < size; ++lp) sum += block[l * size + lp] * v[sh_index(lp + a, m)];
+                u[sh_index(l + a, m)] = sum;
+            }
+        }
+
+        // Step 5: back to world, D(F') = Dz(φ) Xᵀ Dz(θ) X, then dot with l.
+        quarter_turn_lanes<kOrder>(order, setup.x_rows, setup.x_columns, setup.x_values, u, y);
+        rotate_z_lanes<kOrder>(order, ct, st, y);
+        quarter_turn_lanes<kOrder>(order, setup.xt_rows, setup.xt_columns, setup.xt_values, y, u);
+        rotate_z_lanes<kOrder>(order, cp, sp, u);
+
+        VecD rgb[3] = {splat(0.0), splat(0.0), splat(0.0)};
+        for (int i = 0; i < coefficients; ++i)
+            for (int c = 0; c < 3; ++c) rgb[c] += setup.lighting[i][c] * u[i];
+        if (translucent) {
+            // Back lobe about −n, folded into setup.back: needs y(n) in world.
+            eval_lanes<kOrder>(setup, nx, ny, nz, y);
+            for (int i = 0; i < coefficients; ++i)
+                for (int c = 0; c < 3; ++c) rgb[c] += setup.back[i][c] * y[i];
+        }
+        VecD visibility = splat(0.0);
+        if (buffers.visibility)
+            for (int l = 0; l < order; ++l)
+                visibility += setup.ao_weight[l] * (phong ? normal_zonal[l] : v[sh_index(l, 0)]);
+
+        for (int k = 0; k < count; ++k) {
+            const std::size_t vertex = start + k;
+            const bool ok = valid[k] != 0;
+            invalid_count += ok ? 0 : 1;
+            for (int c = 0; c < 3; ++c) buffers.rgb[3 * vertex + c] = ok ? static_cast<Real>(rgb[c][k]) : Real(0);
+            if (buffers.visibility) buffers.visibility[vertex] = ok ? static_cast<Real>(visibility[k]) : Real(0);
+        }
+    }
+}
+
+template <typename Real>
+using RangeFunction = void (*)(const PoseShadingSetup&, const PoseBuffers<Real>&, std::size_t, std::size_t,
+                               std::size_t&);
+
+template <typename Real>
+RangeFunction<Real> range_function(int order) {
+    switch (order) {
+        case 1: return &shade_range<Real, 1>;
+        case 2: return &shade_range<Real, 2>;
+        case 3: return &shade_range<Real, 3>;
+        case 4: return &shade_range<Real, 4>;
+        case 5: return &shade_range<Real, 5>;
+        case 6: return &shade_range<Real, 6>;
+        case 7: return &shade_range<Real, 7>;
+        case 8: return &shade_range<Real, 8>;
+        default: return &shade_range<Real, 0>;
+    }
+}
+
+// The Legendre recurrence coefficients, in double.
+struct LegendreCoefficients {
+    std::array<double, max_order> diagonal{}, first{};
+    std::array<double, max_order * max_order> a{}, b{};
+
+    LegendreCoefficients() {
+        double product = 1.0;
+        for (int m = 0; m < max_order; ++m) {
+            if (m > 0) product *= std::sqrt((2.0 * m - 1.0) / (2.0 * m));
+            diagonal[m] = std::sqrt((2.0 * m + 1.0) / (4.0 * std::numbers::pi)) * product;
+            first[m] = std::sqrt(2.0 * m + 3.0);
+            for (int l = m + 2; l < max_order; ++l) {
+                const double l2 = double(l) * l, m2 = double(m) * m, lm1 = l - 1.0;
+                a[sh_index(l, m)] = std::sqrt((4.0 * l2 - 1.0) / (l2 - m2));
+                b[sh_index(l, m)] = std::sqrt((lm1 * lm1 - m2) / (4.0 * lm1 * lm1 - 1.0));
+            }
+        }
+    }
+};
+
+const LegendreCoefficients& legendre() {
+    static const LegendreCoefficients table;
+    return table;
+}
+
+}  // namespace
+
+PoseShader::PoseShader(int order) : order_(order) {
+    check_order(order);
+    diffuse_ = std::make_shared<const ZonalOperator>(diffuse_zonal_operator(order));
+
+    // X = D(Rx(90°)): Ry(θ) = Rx(90°)ᵀ Rz(θ) Rx(90°).
+    const Eigen::Matrix3d quarter_turn = Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    const ShRotation rotation(order, quarter_turn);
+    for (int l = 0; l < order; ++l) {
+        const Eigen::MatrixXd& block = rotation.band(l);
+        for (int i = 0; i < 2 * l + 1; ++i)
+            for (int j = 0; j < 2 * l + 1; ++j) {
+                // Entries that vanish analytically come out at rounding level.
+                if (std::abs(block(i, j)) < 1e-14) continue;
+                quarter_turn_.push_back({l * l + i, l * l + j, block(i, j)});
+                quarter_turn_transposed_.push_back({l * l + j, l * l + i, block(i, j)});
+            }
+    }
+    const auto by_row = [](const SparseEntry& a, const SparseEntry& b) {
+        return a.row != b.row ? a.row < b.row : a.column < b.column;
+    };
+    std::sort(quarter_turn_transposed_.begin(), quarter_turn_transposed_.end(), by_row);
+
+    // h_l = ∫_{S²} (1/π) max(0, cosθ) y_l0 = √(4π) T_d[l0, 00] (y_00 = 1/√(4π)).
+    for (int l = 0; l < order; ++l)
+        cosine_zonal_[l] = std::sqrt(4.0 * std::numbers::pi) * diffuse_->blocks[0](l, 0);
+}
+
+std::shared_ptr<const ZonalOperator> PoseShader::operator_for(ShadingModel model, double phong_exponent) const {
+    if (model != ShadingModel::phong) return diffuse_;
+    if (!(phong_exponent >= 0.0))
+        throw ArgumentError("the Phong exponent must be >= 0, got " + std::to_string(phong_exponent));
+    {
+        std::lock_guard<std::mutex> lock(cache_mutex_);
+        const auto found = phong_cache_.find(phong_exponent);
+        if (found != phong_cache_.end()) return found->second;
+    }
+    auto made = std::make_shared<const ZonalOperator>(phong_zonal_operator(order_, phong_exponent));
+    std::lock_guard<std::mutex> lock(cache_mutex_);
+    if (phong_cache_.size() >= 16) phong_cache_.clear();
+    phong_cache_.emplace(phong_exponent, made);
+    return made;
+}
+
+template <typename Real>
+ShadingStats PoseShader::shade_impl(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters,
+                                    const PoseBuffers<Real>& buffers) const {
+    const int coefficients = coefficient_count(order_);
+    if (lighting.rows() != coefficients || lighting.cols() != 3)
+        throw ArgumentError("lighting must have shape (order², 3) = (" + std::to_string(coefficients) +
+                            ", 3), got (" + std::to_string(lighting.rows()) + ", " +
+                            std::to_string(lighting.cols()) + ")");
+    if (!lighting.allFinite()) throw ArgumentError("lighting has a NaN or infinite coefficient");
+    if (buffers.lobes_per_vertex < 1)
+        throw ArgumentError("each vertex needs at least one ZH lobe, got " +
+                            std::to_string(buffers.lobes_per_vertex));
+    if (parameters.threads < 0)
+        throw ArgumentError("threads must be >= 0 (0 = all cores), got " + std::to_string(parameters.threads));
+    const bool phong = parameters.model == ShadingModel::phong;
+    if (phong && !parameters.camera.allFinite()) throw ArgumentError("the camera position must be finite");
+    for (const double e : parameters.transmission)
+        if (!std::isfinite(e)) throw ArgumentError("the transmission colour must be finite");
+    if (buffers.vertex_count == 0) return {};
+    if (!buffers.lobe_axes || !buffers.lobe_bands || !buffers.normals || !buffers.tangents || !buffers.rgb)
+        throw ArgumentError("pose shading needs lobe axes, lobe bands, normals, tangents and an output");
+    if (phong && !buffers.positions) throw ArgumentError("Phong shading needs vertex positions (local viewer)");
+
+    const std::shared_ptr<const ZonalOperator> op = operator_for(parameters.model, parameters.phong_exponent);
+    return run_threads(make_setup(*op, lighting, parameters, buffers.lobes_per_vertex, buffers.visibility != nullptr),
+                       buffers, parameters.threads);
+}
+
+PoseShadingSetup PoseShader::make_setup(const ZonalOperator& op, const Eigen::MatrixXd& lighting,
+                                        const ShadingParameters& parameters, int lobes, bool want_visibility) const {
+    const int coefficients = coefficient_count(order_);
+    PoseShadingSetup setup;
+    setup.order = order_;
+    setup.lobes = lobes;
+    setup.model = parameters.model;
+    setup.camera = parameters.camera;
+    setup.want_visibility = want_visibility;
+    for (int a = 0; a < order_; ++a) {
+        setup.block_offset[a] = int(setup.blocks.size());
+        const Eigen::MatrixXd& block = op.blocks[a];
+        for (int i = 0; i < block.rows(); ++i)
+            for (int j = 0; j < block.cols(); ++j) setup.blocks.push_back(block(i, j));
+    }
+    for (const SparseEntry& e : quarter_turn_) {
+        setup.x_rows.push_back(e.row);
+        setup.x_columns.push_back(e.column);
+        setup.x_values.push_back(e.value);
+    }
+    for (const SparseEntry& e : quarter_turn_transposed_) {
+        setup.xt_rows.push_back(e.row);
+        setup.xt_columns.push_back(e.column);
+        setup.xt_values.push_back(e.value);
+    }
+    const LegendreCoefficients& t = legendre();
+    for (int i = 0; i < max_order; ++i) {
+        setup.diagonal[i] = t.diagonal[i];
+        setup.first[i] = t.first[i];
+    }
+    for (int i = 0; i < max_order * max_order; ++i) {
+        setup.a[i] = t.a[i];
+        setup.b[i] = t.b[i];
+    }
+    setup.lighting.resize(coefficients);
+    setup.back.resize(coefficients);
+    for (int l = 0; l < order_; ++l) {
+        const double zh_scale = std::sqrt(4.0 * std::numbers::pi / (2.0 * l + 1.0));
+        setup.zh_scale[l] = zh_scale;
+        setup.ao_weight[l] = std::sqrt(4.0 * std::numbers::pi) * diffuse_->blocks[0](0, l);
+        // y_lm(−n) = (−1)^l y_lm(n).
+        const double back_scale = ((l % 2) ? -1.0 : 1.0) * zh_scale * cosine_zonal_[l];
+        for (int m = -l; m <= l; ++m) {
+            const int i = sh_index(l, m);
+            for (int c = 0; c < 3; ++c) {
+                setup.lighting[i][c] = lighting(i, c);
+                setup.back[i][c] = parameters.transmission[c] * back_scale * lighting(i, c);
+            }
+        }
+    }
+    return setup;
+}
+
+template <typename Real>
+ShadingStats PoseShader::run_threads(const PoseShadingSetup& setup, const PoseBuffers<Real>& buffers, int thread_count) {
+    // Contiguous ranges, a multiple of kLanes each, at least kMinimumRange
+    // vertices per thread so that starting a thread (~tens of µs) pays off.
+    constexpr std::size_t kMinimumRange = 2048;
+    const std::size_t n = buffers.vertex_count;
+    std::size_t threads = thread_count ? std::size_t(thread_count) : std::max(1u, std::thread::hardware_concurrency());
+    threads = std::max<std::size_t>(1, std::min(threads, (n + kMinimumRange - 1) / kMinimumRange));
+    std::size_t per_thread = (n + threads - 1) / threads;
+    per_thread = (per_thread + kLanes - 1) / kLanes * kLanes;
+
+    const RangeFunction<Real> run = range_function<Real>(setup.order);
+    std::vector<std::size_t> invalid(threads, 0);
+    std::vector<std::thread> workers;
+    workers.reserve(threads);
+    std::size_t inline_from = threads;  // ranges the calling thread runs itself
+    for (std::size_t w = 1; w < threads; ++w) {
+        const std::size_t begin = std::min(n, w * per_thread), end = std::min(n, begin + per_thread);
+        try {
+            workers.emplace_back(run, std::cref(setup), std::cref(buffers), begin, end, std::ref(invalid[w]));
+        } catch (const std::system_error&) {
+            inline_from = w;  // no more threads to be had: do the rest here
+            break;
+        }
+    }
+    run(setup, buffers, 0, std::min(n, per_thread), invalid[0]);
+    for (std::size_t w = inline_from; w < threads; ++w) {
+        const std::size_t begin = std::min(n, w * per_thread), end = std::min(n, begin + per_thread);
+        run(setup, buffers, begin, end, invalid[w]);
+    }
+    for (std::thread& worker : workers) worker.join();
+
+    ShadingStats stats;
+    for (const std::size_t count : invalid) stats.invalid_vertices += count;
+    return stats;
+}
+
+ShadingStats PoseShader::shade(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters,
+                               const PoseBuffers<float>& buffers) const {
+    return shade_impl(lighting, parameters, buffers);
+}
+
+ShadingStats PoseShader::shade(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters,
+                               const PoseBuffers<double>& buffers) const {
+    return shade_impl(lighting, parameters, buffers);
+}
+
+}  // namespace penumbra::sh
