@@ -1,19 +1,85 @@
-"""Shadowed relighting of rigged meshes: bake, fit, shade (see core/visibility)."""
+"""Shadowed relighting of rigged meshes: bake a pose-space ZH visibility model
+(core/visibility), then shade every pose from it (paper §3–4).
 
-from . import settings
+Operators (names are a contract): penumbra.bake_visibility,
+penumbra.apply_visibility, penumbra.setup_material. Per-object settings:
+`object.penumbra_visibility`; scene settings: `scene.penumbra.visibility`."""
+
+import json
+
+import bpy
+
+from . import settings, bake, runtime, material
 
 # Registered before the scene's `penumbra` group, which points at SceneSettings.
 settings_classes = settings.classes
 SceneSettings = settings.VisibilitySceneSettings
 
+_operator_classes = (*bake.classes, *runtime.classes, *material.classes)
+
 
 def draw_panel(layout, context):
-    layout.label(text="Visibility baker: not yet available")
+    obj = context.active_object
+    scene_settings = context.scene.penumbra.visibility
+    if obj is None or obj.type != "MESH":
+        layout.label(text="Select a skinned mesh", icon="INFO")
+        return
+    s = obj.penumbra_visibility
+    box = layout.box()
+    box.label(text="Bake", icon="RENDER_STILL")
+    row = box.row(align=True)
+    row.prop(s, "frame_start")
+    row.prop(s, "frame_end")
+    row.prop(s, "frame_step")
+    row = box.row(align=True)
+    row.prop(s, "rays")
+    row.prop(s, "lobes")
+    box.prop(s, "occluders")
+    box.prop(s, "filepath")
+    box.operator("penumbra.bake_visibility", icon="RENDER_STILL")
+
+    box = layout.box()
+    box.prop(s, "enabled", text="Shade from Model")
+    box.prop(s, "brdf")
+    if s.brdf == "PHONG":
+        box.prop(s, "phong_exponent")
+    elif s.brdf == "TRANSLUCENT":
+        box.prop(s, "transmission")
+    row = box.row(align=True)
+    row.operator("penumbra.apply_visibility", icon="SHADING_RENDERED")
+    row.operator("penumbra.setup_material", icon="MATERIAL")
+    box.prop(scene_settings, "live_update")
+    box.prop(scene_settings, "threads")
+    if s.status:
+        alert = box.box()
+        alert.alert = True
+        alert.label(text=s.status, icon="ERROR")
+
+    if s.report:
+        try:
+            summary = json.loads(s.report)
+        except ValueError:
+            summary = None
+        if summary:
+            box = layout.box()
+            box.label(text="Last bake", icon="INFO")
+            box.label(text=f"{summary['frames']} frames, {summary['rays']} rays, {summary['lobes']} lobes")
+            box.label(text=f"Active joints: {', '.join(summary['active_joints']) or 'none'}")
+            box.label(text=f"ZH fit error (RMS): {summary['zh_fit']['sh_rms']:.4f}")
+            box.label(text=f"Held-out AO error: {summary['model_holdout']['ao_mean_abs']:.4f}")
+            box.label(text=f"Model {summary['model_bytes'] / 1e6:.2f} MB (dense {summary['dense_bytes'] / 1e6:.2f} MB)")
+            box.label(text=f"Bake {summary['seconds_bake']:.1f} s, fit {summary['seconds_fit']:.1f} s")
 
 
 def register():
-    pass
+    bpy.types.Object.penumbra_visibility = bpy.props.PointerProperty(type=settings.VisibilityObjectSettings)
+    for cls in _operator_classes:
+        bpy.utils.register_class(cls)
+    runtime.register_handlers()
 
 
 def unregister():
-    pass
+    runtime.unregister_handlers()
+    for cls in reversed(_operator_classes):
+        bpy.utils.unregister_class(cls)
+    del bpy.types.Object.penumbra_visibility

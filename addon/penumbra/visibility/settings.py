@@ -1,10 +1,56 @@
-"""Visibility-baker settings stored in the .blend."""
+"""Visibility-baker settings stored in the .blend.
+
+Per object (`object.penumbra_visibility`): what to bake, the model it uses,
+how to shade it, and the report of the last bake. Per scene
+(`scene.penumbra.visibility`): run-time options shared by every object."""
 
 import bpy
 
 
+def _refresh(self, context):
+    # Late import: runtime imports this module.
+    from . import runtime
+    runtime.request_refresh()
+
+
 class VisibilitySceneSettings(bpy.types.PropertyGroup):
-    pass
+    threads: bpy.props.IntProperty(
+        name="Threads", default=0, min=0, max=256,
+        description="Worker threads for baking and shading (0: every core)")
+    live_update: bpy.props.BoolProperty(
+        name="Live Update", default=True,
+        description="Re-shade enabled objects on frame changes and pose edits", update=_refresh)
 
 
-classes = (VisibilitySceneSettings,)
+class VisibilityObjectSettings(bpy.types.PropertyGroup):
+    # Bake settings (the operator's defaults come from here)
+    frame_start: bpy.props.IntProperty(name="Start", default=1, description="First training frame")
+    frame_end: bpy.props.IntProperty(name="End", default=24, description="Last training frame")
+    frame_step: bpy.props.IntProperty(name="Step", default=1, min=1, description="Frames between training poses")
+    rays: bpy.props.IntProperty(name="Rays", default=256, min=16, max=65536,
+                                description="Ray directions per vertex over the whole sphere")
+    lobes: bpy.props.IntProperty(name="Lobes", default=2, min=1, max=4, description="ZH lobes per vertex")
+    sh_order: bpy.props.IntProperty(name="SH Order", default=4, min=2, max=8,
+                                    description="Spherical-harmonic order (bands) of the visibility")
+    occluders: bpy.props.PointerProperty(name="Occluders", type=bpy.types.Collection,
+                                         description="Other objects that shadow this mesh (optional)")
+    filepath: bpy.props.StringProperty(name="Model File", subtype="FILE_PATH", default="",
+                                       description="Where the model is written (empty: next to the .blend)")
+    # Run time
+    enabled: bpy.props.BoolProperty(name="Enable", default=False, update=_refresh,
+                                    description="Shade this object from its visibility model on every frame")
+    brdf: bpy.props.EnumProperty(
+        name="BRDF", default="DIFFUSE", update=_refresh,
+        items=(("DIFFUSE", "Diffuse", "Lambertian, shadowed by the baked visibility"),
+               ("PHONG", "Phong", "Normalized Phong about the reflection of the scene camera"),
+               ("TRANSLUCENT", "Translucent", "Thin-membrane translucency: shadowed front, unshadowed back")))
+    phong_exponent: bpy.props.FloatProperty(name="Exponent", default=16.0, min=0.0, soft_max=1000.0, update=_refresh)
+    transmission: bpy.props.FloatVectorProperty(name="Transmission", subtype="COLOR", size=3, min=0.0,
+                                                default=(0.5, 0.5, 0.5), update=_refresh)
+    # Result of the last bake, saved with the .blend
+    model_path: bpy.props.StringProperty(name="Model", subtype="FILE_PATH", default="")
+    report: bpy.props.StringProperty(name="Report", default="", description="JSON summary of the last bake")
+    status: bpy.props.StringProperty(name="Status", default="", description="Last run-time problem, if any")
+
+
+classes = (VisibilitySceneSettings, VisibilityObjectSettings)

@@ -1,0 +1,452 @@
+"""Baking a visibility model from Blender: gather frames (main thread, bpy),
+bake visibility and fit (C++ with the GIL released), write the model, store
+the report on the object.
+
+The seam for render farms: `bake_training_set` bakes a frame range of one
+object into a _penumbra.VisibilityTrainingSet, which can be saved (.pvis)
+from a headless job (scripts/visibility_bake_farm.py); `fit_and_store`
+merges any number of pieces and fits. The operator runs the same two steps.
+"""
+
+import json
+import os
+import tempfile
+import threading
+import time
+
+import bpy
+
+from .. import native
+from . import scene_data
+from .scene_data import VisibilityInputError
+
+DEFAULT_EXTENSION = ".pzh"
+
+
+def default_model_path(obj):
+    """Next to the .blend (`//<blend>_<object>.pzh`), or a temporary folder for an unsaved file."""
+    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in obj.name)
+    if bpy.data.filepath:
+        folder = os.path.dirname(bpy.data.filepath)
+        stem = os.path.splitext(os.path.basename(bpy.data.filepath))[0]
+        return os.path.join(folder, f"{stem}_{safe}{DEFAULT_EXTENSION}")
+    return os.path.join(tempfile.gettempdir(), f"penumbra_{safe}{DEFAULT_EXTENSION}")
+
+
+def resolve_path(path, obj):
+    return bpy.path.abspath(path) if path else default_model_path(obj)
+
+
+class BakeJob:
+    """Everything one bake needs, checked up front so that a bad input fails
+    before any frame is touched."""
+
+    def __init__(self, context, obj, frame_start, frame_end, frame_step, rays, lobes, sh_order, occluders,
+                 below_horizon="occluded", threads=0, actions=()):
+        core = native.require()
+        self.scene = context.scene
+        self.obj = obj
+        self.armature = scene_data.armature_of(obj)
+        if len(obj.data.vertices) == 0:
+            raise VisibilityInputError(f"'{obj.name}' has no vertices: nothing to bake")
+        if len(obj.data.polygons) == 0:
+            raise VisibilityInputError(f"'{obj.name}' has no faces: visibility needs a surface")
+        self.actions = list(actions)
+        if not self.actions and not scene_data.armature_has_animation(self.armature):
+            raise VisibilityInputError(
+                f"armature '{self.armature.name}' has no animation (no action, NLA strip or driver): "
+                "the training poses are the frames of its actions")
+        if frame_step < 1:
+            raise VisibilityInputError("frame step must be at least 1")
+        if frame_end < frame_start:
+            raise VisibilityInputError(f"frame range is empty ({frame_start}..{frame_end})")
+        frames = list(range(frame_start, frame_end + 1, frame_step))
+        if not frames:
+            raise VisibilityInputError("no frames to bake")
+        # (action or None for what the armature plays now, frame); several
+        # actions are played in turn over the same range.
+        self.frames = [(action, f) for action in (self.actions or [None]) for f in frames]
+        self.rays, self.lobes, self.order = rays, lobes, sh_order
+        self.occluders = occluders
+        self.threads = threads
+        self.bone_names = [b.name for b in self.armature.pose.bones]
+        self.vertex_count = len(obj.data.vertices)
+        self.topology = scene_data.topology_hash(obj.data)
+        sizes, loops = scene_data.polygon_topology(obj.data)
+        self.neighbours = core.visibility_reference_neighbours(self.vertex_count, sizes, loops)
+        self.influence = scene_data.bone_influence(obj, self.armature)
+        self.training = core.VisibilityTrainingSet(self.vertex_count, self.topology, self.bone_names, order=sh_order,
+                                                   rays=rays, below_horizon=below_horizon)
+        self.original_frame = self.scene.frame_current
+        self.original_action = self.armature.animation_data.action if self.armature.animation_data else None
+        self.diagnostics = None
+        self.rays_cast = 0
+        self.seconds_trace = 0.0  # inside the C++ bake (frames, BVH, rays, projection)
+        self.repaired_normals = 0
+
+    def gather(self, entry):
+        """Main thread: pose the scene at `entry` ((action, frame) or a frame) and copy what the bake needs.
+        Returns (training frame id, mesh, rotations, occluders); the id is the frame number, plus
+        100000 × the action's index when several actions are baked."""
+        action, frame = entry if isinstance(entry, tuple) else (None, entry)
+        frame_id = frame
+        if action is not None:
+            if self.armature.animation_data is None:
+                self.armature.animation_data_create()
+            if self.armature.animation_data.action != action:
+                self.armature.animation_data.action = action
+            frame_id = self.actions.index(action) * 100000 + frame
+        from . import runtime
+        with runtime.paused():  # the bake's own frame changes need no shading
+            self.scene.frame_set(frame)
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        mesh = scene_data.evaluated_mesh(self.obj, depsgraph)
+        if len(mesh.positions) != self.vertex_count or mesh.topology != self.topology:
+            changing = [m.name for m in self.obj.modifiers if m.type not in DEFORM_ONLY]
+            raise VisibilityInputError(
+                f"at frame {frame} the modifiers of '{self.obj.name}' change its topology "
+                f"({len(mesh.positions)} vertices after modifiers, {self.vertex_count} in the mesh); "
+                f"disable or apply {', '.join(changing) or 'the generating modifiers'} before baking")
+        if self.diagnostics is None:
+            d = native.require().visibility_mesh_diagnostics(mesh.positions, mesh.normals, mesh.triangles)
+            if d["normals_point_inward"]:
+                raise VisibilityInputError(
+                    f"the normals of '{self.obj.name}' point inward (signed volume {d['signed_volume']:.3g}); "
+                    "fix them with Mesh > Normals > Recalculate Outside, then bake again")
+            self.diagnostics = d
+        occluders = scene_data.occluder_meshes(self.occluders, depsgraph, self.obj)
+        rotations = scene_data.bone_rotations(self.armature)
+        return frame_id, mesh, rotations, occluders
+
+    def bake(self, gathered, progress=None):
+        """Any thread: trace one gathered frame (releases the GIL)."""
+        frame, mesh, rotations, occluders = gathered
+        started = time.perf_counter()
+        stats = self.training.bake_frame(float(frame), mesh.positions, mesh.normals, mesh.triangles, self.neighbours,
+                                         rotations, occluders, threads=self.threads, progress=progress)
+        self.seconds_trace += time.perf_counter() - started
+        self.rays_cast += stats["rays_cast"]
+        self.repaired_normals = max(self.repaired_normals, stats["repaired_normals"])
+
+    def restore_frame(self):
+        if self.actions and self.armature.animation_data is not None and \
+                self.armature.animation_data.action != self.original_action:
+            self.armature.animation_data.action = self.original_action
+        self.scene.frame_set(self.original_frame)
+
+
+# Modifiers that move vertices without changing the topology.
+DEFORM_ONLY = {"ARMATURE", "CAST", "CURVE", "DISPLACE", "HOOK", "LAPLACIANDEFORM", "LATTICE", "MESH_DEFORM",
+               "SHRINKWRAP", "SIMPLE_DEFORM", "SMOOTH", "CORRECTIVE_SMOOTH", "LAPLACIANSMOOTH", "SURFACE_DEFORM",
+               "WARP", "WAVE", "VOLUME_DISPLACE", "WEIGHTED_NORMAL", "NORMAL_EDIT", "DATA_TRANSFER",
+               "MESH_CACHE", "MESH_SEQUENCE_CACHE", "UV_PROJECT", "UV_WARP", "VERTEX_WEIGHT_EDIT",
+               "VERTEX_WEIGHT_MIX", "VERTEX_WEIGHT_PROXIMITY"}
+
+
+def bake_training_set(context, obj, frame_start, frame_end, frame_step, rays=256, sh_order=4, occluders=None,
+                      below_horizon="occluded", threads=0, progress=None, log=None, actions=()):
+    """Synchronous bake of one frame range (of each of `actions`, or of what the
+    armature plays now) into a training set (the farm seam). Returns (job, training_set)."""
+    job = BakeJob(context, obj, frame_start, frame_end, frame_step, rays, 1, sh_order, occluders, below_horizon,
+                  threads, actions)
+    try:
+        for k, entry in enumerate(job.frames):
+            gathered = job.gather(entry)
+
+            def frame_progress(fraction, k=k):
+                if progress is None:
+                    return True
+                return progress((k + fraction) / len(job.frames))
+            job.bake(gathered, frame_progress)
+            if log:
+                log(f"visibility bake: frame {entry[1]} ({k + 1}/{len(job.frames)})")
+    finally:
+        job.restore_frame()
+    return job, job.training
+
+
+def fit_model(training, influence, lobes, threads=0, progress=None):
+    core = native.require()
+    return core.fit_visibility_model(training, influence, lobes=lobes, threads=threads, progress=progress)
+
+
+def summary_of(job_or_none, training, report, model_path, seconds_bake, seconds_fit, model):
+    kept = [j for j in report["joints"] if j["active"]]
+    dropped = [j for j in report["joints"] if not j["active"]]
+    summary = {
+        "model_path": model_path,
+        "vertices": training.vertex_count,
+        "frames": len(training),
+        "rays": training.rays,
+        "sh_order": training.order,
+        "lobes": model.lobes,
+        "below_horizon": training.below_horizon,
+        "pose_features": model.features,
+        "active_joints": [j["name"] for j in kept],
+        "joints": report["joints"],
+        "zh_fit": report["zh_fit"],
+        "model_training": report["model_training"],
+        "model_holdout": report["model_holdout"],
+        "holdout_frames": report["holdout_frames"],
+        "ridge_relative": report["ridge_relative"],
+        "constant_vertices": report["constant_vertices"],
+        "model_bytes": report["model_bytes"],
+        "dense_bytes": report["dense_bytes"],
+        "seconds_bake": round(seconds_bake, 3),
+        "seconds_fit": round(seconds_fit, 3),
+        "dropped_joints": {j["name"]: j["reason"] for j in dropped},
+    }
+    if job_or_none is not None:
+        summary["rays_cast"] = job_or_none.rays_cast
+        summary["repaired_normals"] = job_or_none.repaired_normals
+        summary["zero_area_triangles"] = job_or_none.diagnostics["zero_area_triangles"] if job_or_none.diagnostics else 0
+    return summary
+
+
+def store_result(obj, model, summary, path):
+    """Writes the model (atomically) and records it on the object."""
+    model.save(path)
+    settings = obj.penumbra_visibility
+    settings.model_path = path
+    settings.report = json.dumps(summary)
+    settings.status = ""
+    from . import runtime
+    runtime.forget(obj)
+
+
+def fit_and_store(obj, pieces, lobes, path, threads=0, progress=None, job=None, seconds_bake=0.0):
+    """Merges training-set pieces (one or many), fits, writes the model, stores the summary."""
+    core = native.require()
+    training = pieces[0] if len(pieces) == 1 else core.VisibilityTrainingSet.merge(list(pieces))
+    armature = scene_data.armature_of(obj)
+    if training.vertex_count != len(obj.data.vertices) or training.topology_hash != scene_data.topology_hash(obj.data):
+        raise VisibilityInputError(f"the baked frames were made from another mesh than '{obj.name}'")
+    if training.bone_names != [b.name for b in armature.pose.bones]:
+        raise VisibilityInputError(f"the baked frames were made with another armature than '{armature.name}'")
+    influence = job.influence if job is not None else scene_data.bone_influence(obj, armature)
+    started = time.perf_counter()
+    model, report = fit_model(training, influence, lobes, threads, progress)
+    seconds_fit = time.perf_counter() - started
+    summary = summary_of(job, training, report, path, seconds_bake, seconds_fit, model)
+    store_result(obj, model, summary, path)
+    return model, summary
+
+
+class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
+    """Bake a pose-space visibility model of the active skinned mesh (Esc cancels)"""
+
+    bl_idname = "penumbra.bake_visibility"
+    bl_label = "Bake Visibility"
+    bl_options = {"REGISTER", "UNDO"}
+
+    frame_start: bpy.props.IntProperty(name="Start", default=-1, description="First frame (-1: the object's setting)")
+    frame_end: bpy.props.IntProperty(name="End", default=-1, description="Last frame (-1: the object's setting)")
+    frame_step: bpy.props.IntProperty(name="Step", default=0, min=0, description="Step (0: the object's setting)")
+    rays: bpy.props.IntProperty(name="Rays", default=0, min=0, max=65536, description="Rays per vertex (0: the object's setting)")
+    lobes: bpy.props.IntProperty(name="Lobes", default=0, min=0, max=4, description="ZH lobes (0: the object's setting)")
+    sh_order: bpy.props.IntProperty(name="SH Order", default=4, min=2, max=8)
+    occluders: bpy.props.StringProperty(name="Occluders", default="",
+                                        description="Collection of other shadowing objects (empty: the object's setting)")
+    filepath: bpy.props.StringProperty(name="File", subtype="FILE_PATH", default="",
+                                       description="Model file (empty: the object's setting, else next to the .blend)")
+    actions: bpy.props.StringProperty(
+        name="Actions", default="",
+        description="Comma-separated actions played in turn over the frame range (empty: what the armature plays now)")
+    below_horizon: bpy.props.EnumProperty(
+        name="Below Horizon", default="OCCLUDED",
+        items=(("OCCLUDED", "Occluded", "Rays below the tangent plane count as blocked (closed skins)"),
+               ("CAST", "Cast", "Trace them too (open, thin surfaces)")))
+
+    @classmethod
+    def poll(cls, context):
+        return context.active_object is not None and context.active_object.type == "MESH"
+
+    # Settings ------------------------------------------------------------------
+    def _resolved(self, context):
+        obj = context.active_object
+        s = obj.penumbra_visibility
+        occluders = None
+        name = self.occluders
+        if name:
+            occluders = bpy.data.collections.get(name)
+            if occluders is None:
+                raise VisibilityInputError(f"no collection named '{name}'")
+        else:
+            occluders = s.occluders
+        actions = []
+        for name in (n.strip() for n in self.actions.split(",")):
+            if not name:
+                continue
+            action = bpy.data.actions.get(name)
+            if action is None:
+                raise VisibilityInputError(f"no action named '{name}'")
+            actions.append(action)
+        return dict(
+            obj=obj,
+            actions=actions,
+            frame_start=self.frame_start if self.frame_start >= 0 else s.frame_start,
+            frame_end=self.frame_end if self.frame_end >= 0 else s.frame_end,
+            frame_step=self.frame_step or s.frame_step,
+            rays=self.rays or s.rays,
+            lobes=self.lobes or s.lobes,
+            sh_order=self.sh_order,
+            occluders=occluders,
+            path=resolve_path(self.filepath or s.filepath, obj),
+        )
+
+    def _start(self, context):
+        r = self._resolved(context)
+        folder = os.path.dirname(r["path"]) or "."
+        if not os.path.isdir(folder):
+            raise VisibilityInputError(f"the model's folder '{folder}' does not exist")
+        if len(range(r["frame_start"], r["frame_end"] + 1, max(r["frame_step"], 1))) < 2:
+            raise VisibilityInputError("a model needs at least two training frames: widen the frame range")
+        self._settings = r
+        self._job = BakeJob(context, r["obj"], r["frame_start"], r["frame_end"], r["frame_step"], r["rays"],
+                            r["lobes"], r["sh_order"], r["occluders"], self.below_horizon.lower(),
+                            context.scene.penumbra.visibility.threads, r["actions"])
+        self._started = time.perf_counter()
+
+    def _finish(self, context, model_and_report, seconds_bake):
+        job, r = self._job, self._settings
+        model, report = model_and_report
+        summary = summary_of(job, job.training, report, r["path"], seconds_bake,
+                             time.perf_counter() - self._fit_started, model)
+        store_result(r["obj"], model, summary, r["path"])
+        self.report({"INFO"}, f"Baked {len(job.frames)} frames of '{r['obj'].name}': "
+                              f"{len(summary['active_joints'])} active joints, held-out AO error "
+                              f"{summary['model_holdout']['ao_mean_abs']:.4f}, model {summary['model_bytes'] / 1e6:.2f} MB "
+                              f"→ {r['path']}")
+
+    # Synchronous (background mode, scripts) ------------------------------------
+    def execute(self, context):
+        try:
+            self._start(context)
+        except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        job = self._job
+        last = [0.0]
+
+        def printer(prefix):
+            def report(fraction):
+                now = time.perf_counter()
+                if now - last[0] > 1.0 or fraction >= 1.0:
+                    last[0] = now
+                    print(f"penumbra: {prefix} {100.0 * fraction:5.1f}%", flush=True)
+                return True
+            return report
+
+        try:
+            for k, entry in enumerate(job.frames):
+                gathered = job.gather(entry)
+                job.bake(gathered, None)
+                printer("bake visibility")((k + 1) / len(job.frames))
+            job.restore_frame()
+            seconds_bake = time.perf_counter() - self._started
+            self._fit_started = time.perf_counter()
+            result = fit_model(job.training, job.influence, self._settings["lobes"], job.threads, printer("fit"))
+            self._finish(context, result, seconds_bake)
+        except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
+            job.restore_frame()
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        return {"FINISHED"}
+
+    # Interactive: modal, worker thread, Esc cancels -------------------------------
+    def invoke(self, context, event):
+        if bpy.app.background:
+            return self.execute(context)
+        try:
+            self._start(context)
+        except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self._cancel = False
+        self._fraction = 0.0
+        self._thread = None
+        self._error = None
+        self._result = None
+        self._next = 0          # next frame index to gather
+        self._phase = "bake"
+        self._seconds_bake = 0.0
+        wm = context.window_manager
+        wm.progress_begin(0, 1000)
+        self._timer = wm.event_timer_add(0.05, window=context.window)
+        wm.modal_handler_add(self)
+        return {"RUNNING_MODAL"}
+
+    def _worker(self, fn):
+        def progress(fraction):
+            self._fraction = fraction
+            return not self._cancel
+
+        def run():
+            try:
+                self._result = fn(progress)
+            except BaseException as error:  # noqa: BLE001 - handed to the main thread
+                self._error = error
+        self._thread = threading.Thread(target=run, daemon=True)
+        self._thread.start()
+
+    def modal(self, context, event):
+        if event.type == "ESC":
+            self._cancel = True
+        if event.type != "TIMER":
+            return {"RUNNING_MODAL"}
+        if self._thread is not None and self._thread.is_alive():
+            self._show_progress(context)
+            return {"RUNNING_MODAL"}
+        self._thread = None
+        if self._error is not None or self._cancel:
+            return self._stop(context, self._error)
+        job = self._job
+        try:
+            if self._phase == "bake":
+                if self._next < len(job.frames):
+                    gathered = job.gather(job.frames[self._next])
+                    self._next += 1
+                    self._worker(lambda progress, g=gathered: job.bake(g, progress))
+                else:
+                    job.restore_frame()
+                    self._seconds_bake = time.perf_counter() - self._started
+                    self._phase = "fit"
+                    self._fit_started = time.perf_counter()
+                    self._worker(lambda progress: fit_model(job.training, job.influence, self._settings["lobes"],
+                                                            job.threads, progress))
+            elif self._phase == "fit":
+                self._finish(context, self._result, self._seconds_bake)
+                return self._stop(context, None, finished=True)
+        except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
+            return self._stop(context, error)
+        self._show_progress(context)
+        return {"RUNNING_MODAL"}
+
+    def _show_progress(self, context):
+        job = self._job
+        if self._phase == "bake":
+            done = (max(self._next - 1, 0) + (self._fraction if self._thread else 1.0)) / len(job.frames)
+            overall, text = 0.9 * done, f"Baking visibility: frame {min(self._next, len(job.frames))}/{len(job.frames)}"
+        else:
+            overall, text = 0.9 + 0.1 * self._fraction, "Fitting the pose model"
+        context.window_manager.progress_update(int(1000 * overall))
+        if context.workspace:
+            context.workspace.status_text_set(f"{text} ({100 * overall:.0f}%) — Esc to cancel")
+
+    def _stop(self, context, error, finished=False):
+        wm = context.window_manager
+        wm.event_timer_remove(self._timer)
+        wm.progress_end()
+        if context.workspace:
+            context.workspace.status_text_set(None)
+        self._job.restore_frame()
+        if finished:
+            return {"FINISHED"}
+        if error is None or isinstance(error, native.require().Cancelled):
+            self.report({"WARNING"}, "Visibility bake cancelled; the earlier model is untouched")
+        else:
+            self.report({"ERROR"}, str(error))
+        return {"CANCELLED"}
+
+
+classes = (PENUMBRA_OT_bake_visibility,)

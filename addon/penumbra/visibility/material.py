@@ -1,0 +1,69 @@
+"""`penumbra.setup_material`: an Attribute node reading `penumbra_shading`,
+wired into the object's material so Cycles and Eevee renders show it."""
+
+import bpy
+
+from .runtime import SHADING_ATTRIBUTE
+
+NODE_NAME = "Penumbra Shading"
+
+
+def setup_material(obj):
+    """Adds (or reuses) a material whose surface emits the baked shading.
+    The shading is already lit (it includes the World), so it is shown as
+    emission of strength 1: a render then shows exactly penumbra_shading."""
+    if obj.type != "MESH":
+        raise ValueError(f"'{obj.name}' is not a mesh")
+    material = obj.active_material
+    if material is None:
+        material = bpy.data.materials.new(f"{obj.name} Penumbra")
+        obj.data.materials.append(material)
+        obj.active_material_index = len(obj.data.materials) - 1
+    material.use_nodes = True
+    tree = material.node_tree
+    attribute = tree.nodes.get(NODE_NAME)
+    if attribute is None:
+        attribute = tree.nodes.new("ShaderNodeAttribute")
+        attribute.name = NODE_NAME
+        attribute.label = NODE_NAME
+        attribute.location = (-500, 300)
+    attribute.attribute_type = "GEOMETRY"
+    attribute.attribute_name = SHADING_ATTRIBUTE
+    emission = tree.nodes.get(NODE_NAME + " Emission")
+    if emission is None:
+        emission = tree.nodes.new("ShaderNodeEmission")
+        emission.name = NODE_NAME + " Emission"
+        emission.label = NODE_NAME
+        emission.location = (-250, 300)
+    emission.inputs["Strength"].default_value = 1.0
+    output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial" and n.is_active_output), None)
+    if output is None:
+        output = tree.nodes.new("ShaderNodeOutputMaterial")
+        output.location = (0, 300)
+    tree.links.new(attribute.outputs["Color"], emission.inputs["Color"])
+    tree.links.new(emission.outputs["Emission"], output.inputs["Surface"])
+    return material
+
+
+class PENUMBRA_OT_setup_material(bpy.types.Operator):
+    """Wire the penumbra_shading attribute into the active object's material (shown as emission)"""
+
+    bl_idname = "penumbra.setup_material"
+    bl_label = "Set Up Material"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return context.active_object is not None and context.active_object.type == "MESH"
+
+    def execute(self, context):
+        try:
+            material = setup_material(context.active_object)
+        except ValueError as error:
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Material '{material.name}' now shows {SHADING_ATTRIBUTE}")
+        return {"FINISHED"}
+
+
+classes = (PENUMBRA_OT_setup_material,)

@@ -1,0 +1,251 @@
+"""Run time: on every frame change and pose edit, shade each enabled object
+from its visibility model (paper §4.3) under the World's SH lighting, and
+write the point-domain attributes `penumbra_shading` (colour, scene-linear
+RGB) and `penumbra_visibility` (float, cosine-weighted visibility = AO).
+
+Normalization (a contract): under a uniform World of radiance 1, the diffuse
+`penumbra_shading` of a vertex is its ambient occlusion in [0, 1].
+"""
+
+import os
+import time
+
+import bpy
+import numpy as np
+from bpy.app.handlers import persistent
+
+from .. import native
+from . import scene_data
+from .scene_data import VisibilityInputError
+
+SHADING_ATTRIBUTE = "penumbra_shading"
+VISIBILITY_ATTRIBUTE = "penumbra_visibility"
+
+_models = {}        # object name -> _Loaded
+_busy = False       # re-entry guard: writing attributes triggers depsgraph updates
+last_timings = {}   # seconds of the last shade, split into steps (read by benchmarks)
+
+
+class _Loaded:
+    def __init__(self, obj, path):
+        core = native.require()
+        self.path = path
+        self.mtime = os.path.getmtime(path)
+        model = core.VisibilityPoseModel.load(path)
+        mesh = obj.data
+        if model.vertex_count != len(mesh.vertices):
+            raise VisibilityInputError(
+                f"model '{path}' was made for a mesh with {model.vertex_count} vertices; "
+                f"'{obj.name}' has {len(mesh.vertices)} (another mesh?) — bake again")
+        if model.topology_hash != scene_data.topology_hash(mesh):
+            raise VisibilityInputError(f"model '{path}' was made for another mesh (topology differs from '{obj.name}')")
+        armature = scene_data.armature_of(obj)
+        missing = [j for j in model.joints if j not in armature.pose.bones]
+        if missing:
+            raise VisibilityInputError(
+                f"model '{path}' was made for another armature: '{armature.name}' lacks {', '.join(missing[:5])}")
+        self.model = model
+        sizes, loops = scene_data.polygon_topology(mesh)
+        self.neighbours = core.visibility_reference_neighbours(len(mesh.vertices), sizes, loops)
+
+
+class paused:
+    """Context manager: no shading while the bake poses the scene frame by frame."""
+
+    def __enter__(self):
+        global _busy
+        self._was = _busy
+        _busy = True
+
+    def __exit__(self, *exc):
+        global _busy
+        _busy = self._was
+        return False
+
+
+def forget(obj=None):
+    if obj is None:
+        _models.clear()
+    else:
+        _models.pop(obj.name, None)
+
+
+def loaded_model(obj):
+    s = obj.penumbra_visibility
+    if not s.model_path:
+        raise VisibilityInputError(f"'{obj.name}' has no visibility model: bake one first")
+    path = bpy.path.abspath(s.model_path)
+    if not os.path.isfile(path):
+        raise VisibilityInputError(f"the model file '{path}' of '{obj.name}' is missing — bake again")
+    entry = _models.get(obj.name)
+    if entry is None or entry.path != path or entry.mtime != os.path.getmtime(path):
+        entry = _Loaded(obj, path)
+        _models[obj.name] = entry
+    return entry
+
+
+def _ensure_attributes(mesh):
+    attrs = mesh.attributes
+    shading = attrs.get(SHADING_ATTRIBUTE)
+    if shading is not None and (shading.domain != "POINT" or shading.data_type != "FLOAT_COLOR"):
+        attrs.remove(shading)
+        shading = None
+    if shading is None:
+        shading = attrs.new(SHADING_ATTRIBUTE, "FLOAT_COLOR", "POINT")
+    visibility = attrs.get(VISIBILITY_ATTRIBUTE)
+    if visibility is not None and (visibility.domain != "POINT" or visibility.data_type != "FLOAT"):
+        attrs.remove(visibility)
+        visibility = None
+    if visibility is None:
+        visibility = attrs.new(VISIBILITY_ATTRIBUTE, "FLOAT", "POINT")
+    return SHADING_ATTRIBUTE, VISIBILITY_ATTRIBUTE
+
+
+def shade_object(obj, scene, depsgraph=None):
+    """Shades `obj` at the scene's current state and writes its attributes.
+    Returns (rgb, ao, info). Raises VisibilityInputError / OSError / ValueError."""
+    global last_timings
+    t0 = time.perf_counter()
+    entry = loaded_model(obj)
+    model = entry.model
+    armature = scene_data.armature_of(obj)
+    rotations = scene_data.bone_rotations(armature, model.joints)
+    depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
+    frame = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False)
+    if len(frame.positions) != model.vertex_count:
+        raise VisibilityInputError(f"'{obj.name}' has {len(frame.positions)} vertices after its modifiers; "
+                                   f"the model has {model.vertex_count}")
+    lighting, _ = scene_data.world_lighting(scene, model.order)
+    s = obj.penumbra_visibility
+    camera = np.array(scene.camera.matrix_world.translation) if scene.camera else np.zeros(3)
+    t1 = time.perf_counter()
+    rgb, ao, info = model.shade(rotations, frame.positions, frame.normals, frame.triangles, entry.neighbours,
+                                lighting, model=s.brdf.lower(), phong_exponent=s.phong_exponent, camera=camera,
+                                transmission=np.array(s.transmission[:]),
+                                threads=scene.penumbra.visibility.threads)
+    # SH truncation and model error can overshoot a little: visibility is a
+    # fraction, radiance is never negative.
+    ao = np.clip(ao, 0.0, 1.0)
+    rgb = np.maximum(rgb, 0.0)
+    t2 = time.perf_counter()
+    mesh = obj.data
+    shading_name, visibility_name = _ensure_attributes(mesh)
+    rgba = np.ones((len(rgb), 4), dtype=np.float32)
+    rgba[:, :3] = rgb
+    mesh.attributes[shading_name].data.foreach_set("color", rgba.ravel())
+    mesh.attributes[visibility_name].data.foreach_set("value", ao.astype(np.float32))
+    mesh.update()
+    t3 = time.perf_counter()
+    last_timings = {
+        "gather": t1 - t0,
+        "pose_to_lobes": info["seconds_pose_to_lobes"],
+        "frames": info["seconds_frames"],
+        "shading": info["seconds_shading"],
+        "write_attributes": t3 - t2,
+        "total": t3 - t0,
+    }
+    return rgb, ao, info
+
+
+def shade_enabled_objects(scene, depsgraph=None):
+    global _busy
+    if _busy or native.module is None:
+        return
+    _busy = True
+    try:
+        for obj in scene.objects:
+            settings = getattr(obj, "penumbra_visibility", None)
+            if settings is None or not settings.enabled or obj.type != "MESH":
+                continue
+            try:
+                shade_object(obj, scene, depsgraph)
+                if settings.status:
+                    settings.status = ""
+            except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
+                # A handler must never raise into Blender: say it on the object.
+                message = str(error)
+                if settings.status != message:
+                    settings.status = message
+                    print(f"penumbra: {obj.name}: {message}")
+    finally:
+        _busy = False
+
+
+def _drives_enabled_object(scene, update_ids):
+    names = {getattr(u.id, "name", None) for u in update_ids}
+    for obj in scene.objects:
+        s = getattr(obj, "penumbra_visibility", None)
+        if s is None or not s.enabled or obj.type != "MESH":
+            continue
+        for modifier in obj.modifiers:
+            if modifier.type == "ARMATURE" and modifier.object is not None and modifier.object.name in names:
+                return True
+    return False
+
+
+@persistent
+def on_frame_change(scene, depsgraph=None):
+    if not scene.penumbra.visibility.live_update:
+        return
+    shade_enabled_objects(scene, depsgraph)
+
+
+@persistent
+def on_depsgraph_update(scene, depsgraph):
+    if _busy or not scene.penumbra.visibility.live_update:
+        return
+    # Only pose edits (the armature changed), the camera or the World: our own
+    # attribute writes update the mesh and must not loop back here.
+    relevant = any(isinstance(u.id, (bpy.types.World,)) or
+                   (isinstance(u.id, bpy.types.Object) and u.id.type == "CAMERA") for u in depsgraph.updates)
+    if relevant or _drives_enabled_object(scene, depsgraph.updates):
+        shade_enabled_objects(scene, depsgraph)
+
+
+def request_refresh():
+    """Settings changed in the UI: re-shade at once (outside handlers)."""
+    scene = bpy.context.scene if bpy.context else None
+    if scene is not None and scene.penumbra.visibility.live_update:
+        shade_enabled_objects(scene)
+
+
+class PENUMBRA_OT_apply_visibility(bpy.types.Operator):
+    """Shade the active object (or every enabled object) at the current frame and write its attributes"""
+
+    bl_idname = "penumbra.apply_visibility"
+    bl_label = "Apply Visibility"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return context.active_object is not None and context.active_object.type == "MESH"
+
+    def execute(self, context):
+        obj = context.active_object
+        try:
+            rgb, ao, info = shade_object(obj, context.scene)
+        except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
+            obj.penumbra_visibility.status = str(error)
+            self.report({"ERROR"}, str(error))
+            return {"CANCELLED"}
+        obj.penumbra_visibility.status = ""
+        self.report({"INFO"}, f"Shaded {len(ao)} vertices of '{obj.name}' (mean visibility {float(ao.mean()):.3f})")
+        return {"FINISHED"}
+
+
+classes = (PENUMBRA_OT_apply_visibility,)
+
+
+def register_handlers():
+    if on_frame_change not in bpy.app.handlers.frame_change_post:
+        bpy.app.handlers.frame_change_post.append(on_frame_change)
+    if on_depsgraph_update not in bpy.app.handlers.depsgraph_update_post:
+        bpy.app.handlers.depsgraph_update_post.append(on_depsgraph_update)
+
+
+def unregister_handlers():
+    for handlers, fn in ((bpy.app.handlers.frame_change_post, on_frame_change),
+                         (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update)):
+        while fn in handlers:
+            handlers.remove(fn)
+    forget()

@@ -1,0 +1,160 @@
+#include "visibility/occlusion_scene.hpp"
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <embree3/rtcore.h>
+
+#include "common/error.hpp"
+
+namespace penumbra::visibility {
+
+struct OcclusionScene::Impl {
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    int width = 1;
+
+    ~Impl() {
+        if (scene) rtcReleaseScene(scene);
+        if (device) rtcReleaseDevice(device);
+    }
+};
+
+namespace {
+
+void check_device(RTCDevice device, const char* what) {
+    const RTCError code = rtcGetDeviceError(device);
+    if (code != RTC_ERROR_NONE)
+        throw Error(std::string("Embree failed while ") + what + " (error " + std::to_string(int(code)) + ")");
+}
+
+void validate(const TriangleMesh& mesh, std::size_t index) {
+    const std::string name = "mesh " + std::to_string(index);
+    if (mesh.positions.size() % 3 != 0 || mesh.triangles.size() % 3 != 0)
+        throw ArgumentError(name + ": positions and triangles must hold whole triples");
+    for (float x : mesh.positions)
+        if (!std::isfinite(x)) throw ArgumentError(name + " has a non-finite vertex position");
+    const std::size_t n = mesh.vertex_count();
+    for (std::uint32_t i : mesh.triangles)
+        if (i >= n)
+            throw ArgumentError(name + ": triangle index " + std::to_string(i) + " is out of range (" +
+                                std::to_string(n) + " vertices)");
+}
+
+}  // namespace
+
+OcclusionScene::OcclusionScene(const std::vector<const TriangleMesh*>& meshes) : impl_(std::make_unique<Impl>()) {
+    for (std::size_t k = 0; k < meshes.size(); ++k) validate(*meshes[k], k);
+    impl_->device = rtcNewDevice(nullptr);
+    if (!impl_->device) throw Error("Embree could not create a device (rtcNewDevice failed)");
+    if (rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED))
+        impl_->width = 16;
+    else if (rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED))
+        impl_->width = 8;
+    else if (rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED))
+        impl_->width = 4;
+    impl_->scene = rtcNewScene(impl_->device);
+    // Robust traversal: rays start a hair above the surface, where a
+    // non-robust test can slip between two triangles of a crease.
+    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+    for (const TriangleMesh* mesh : meshes) {
+        if (mesh->triangle_count() == 0) continue;
+        RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        // Embree reads vertices with 16-byte loads: one float of padding at the end.
+        auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+            geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh->vertex_count() + 1));
+        auto* indices = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(
+            geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), mesh->triangle_count()));
+        if (!vertices || !indices) {
+            rtcReleaseGeometry(geometry);
+            check_device(impl_->device, "allocating geometry buffers");
+            throw Error("Embree could not allocate geometry buffers");
+        }
+        std::copy(mesh->positions.begin(), mesh->positions.end(), vertices);
+        vertices[mesh->positions.size()] = vertices[mesh->positions.size() + 1] = vertices[mesh->positions.size() + 2] = 0.0f;
+        std::copy(mesh->triangles.begin(), mesh->triangles.end(), indices);
+        rtcCommitGeometry(geometry);
+        rtcAttachGeometry(impl_->scene, geometry);
+        rtcReleaseGeometry(geometry);
+    }
+    rtcCommitScene(impl_->scene);
+    check_device(impl_->device, "building the scene");
+}
+
+OcclusionScene::~OcclusionScene() = default;
+
+int OcclusionScene::packet_width() const { return impl_->width; }
+
+namespace {
+
+template <int W, typename Packet>
+void cast_packet(RTCScene scene, const Eigen::Vector3f& origin, const Eigen::Vector3f* directions, int count,
+                 float t_near, float t_far, std::uint8_t* occluded,
+                 void (*occluded_fn)(const int*, RTCScene, RTCIntersectContext*, Packet*)) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    for (int start = 0; start < count; start += W) {
+        alignas(64) Packet packet;
+        alignas(64) int valid[W];
+        const int n = std::min(W, count - start);
+        for (int i = 0; i < W; ++i) {
+            const bool live = i < n;
+            valid[i] = live ? -1 : 0;
+            const Eigen::Vector3f& d = directions[start + (live ? i : 0)];
+            packet.org_x[i] = origin.x();
+            packet.org_y[i] = origin.y();
+            packet.org_z[i] = origin.z();
+            packet.dir_x[i] = d.x();
+            packet.dir_y[i] = d.y();
+            packet.dir_z[i] = d.z();
+            packet.tnear[i] = t_near;
+            packet.tfar[i] = t_far;
+            packet.time[i] = 0.0f;
+            packet.mask[i] = 0xFFFFFFFFu;
+            packet.id[i] = 0;
+            packet.flags[i] = 0;
+        }
+        occluded_fn(valid, scene, &context, &packet);
+        // Embree sets tfar to −inf for an occluded ray.
+        for (int i = 0; i < n; ++i) occluded[start + i] = packet.tfar[i] < 0.0f ? 1 : 0;
+    }
+}
+
+}  // namespace
+
+void OcclusionScene::occluded_bundle(const Eigen::Vector3f& origin, const Eigen::Vector3f* directions, int count,
+                                     float t_near, float t_far, std::uint8_t* occluded, bool use_packets) const {
+    switch (use_packets ? impl_->width : 1) {
+        case 16: cast_packet<16, RTCRay16>(impl_->scene, origin, directions, count, t_near, t_far, occluded, rtcOccluded16); return;
+        case 8: cast_packet<8, RTCRay8>(impl_->scene, origin, directions, count, t_near, t_far, occluded, rtcOccluded8); return;
+        case 4: cast_packet<4, RTCRay4>(impl_->scene, origin, directions, count, t_near, t_far, occluded, rtcOccluded4); return;
+        default:
+            for (int i = 0; i < count; ++i) occluded[i] = occluded1(origin, directions[i], t_near, t_far) ? 1 : 0;
+    }
+}
+
+bool OcclusionScene::occluded1(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near,
+                               float t_far) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay ray;
+    ray.org_x = origin.x();
+    ray.org_y = origin.y();
+    ray.org_z = origin.z();
+    ray.dir_x = direction.x();
+    ray.dir_y = direction.y();
+    ray.dir_z = direction.z();
+    ray.tnear = t_near;
+    ray.tfar = t_far;
+    ray.time = 0.0f;
+    ray.mask = 0xFFFFFFFFu;
+    ray.id = 0;
+    ray.flags = 0;
+    rtcOccluded1(impl_->scene, &context, &ray);
+    return ray.tfar < 0.0f;
+}
+
+}  // namespace penumbra::visibility

@@ -1,0 +1,58 @@
+// Embree occlusion queries over triangle meshes: the ray caster of the
+// visibility baker. One scene per frame (the character as that frame deforms
+// it, plus optional occluder objects), queried from many threads at once.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace penumbra::visibility {
+
+// A triangle soup in world space: positions (N × 3 floats, row-major) and
+// triangles (M × 3 vertex indices).
+struct TriangleMesh {
+    std::vector<float> positions;
+    std::vector<std::uint32_t> triangles;
+
+    std::size_t vertex_count() const { return positions.size() / 3; }
+    std::size_t triangle_count() const { return triangles.size() / 3; }
+};
+
+// An Embree device and committed scene. Thread-safe for queries once built.
+// Triangles whose indices fall outside the vertex array, or with a
+// non-finite vertex, throw penumbra::ArgumentError; zero-area triangles are
+// kept (Embree never reports a hit on them).
+class OcclusionScene {
+public:
+    explicit OcclusionScene(const std::vector<const TriangleMesh*>& meshes);
+    ~OcclusionScene();
+    OcclusionScene(const OcclusionScene&) = delete;
+    OcclusionScene& operator=(const OcclusionScene&) = delete;
+
+    // A bundle of rays with a common origin. Writes occluded[i] = 1 when
+    // something lies along origin + t·directions[i] for t in (t_near, t_far),
+    // else 0. Directions need not be normalized. With use_packets, cast as
+    // packets of the widest width the CPU runs natively (16, 8 or 4);
+    // otherwise one by one (rtcOccluded1). The bake uses single rays: its
+    // directions spread over a hemisphere, and packets measured slower
+    // (docs/visibility-benchmark.md).
+    void occluded_bundle(const Eigen::Vector3f& origin, const Eigen::Vector3f* directions, int count,
+                         float t_near, float t_far, std::uint8_t* occluded, bool use_packets = false) const;
+
+    // The packet width occluded_bundle uses with use_packets (16, 8, 4 or 1).
+    int packet_width() const;
+
+    // One ray at a time (rtcOccluded1): the baseline the benchmark compares
+    // the packet path against.
+    bool occluded1(const Eigen::Vector3f& origin, const Eigen::Vector3f& direction, float t_near,
+                   float t_far) const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace penumbra::visibility

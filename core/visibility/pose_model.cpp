@@ -1,0 +1,509 @@
+#include "visibility/pose_model.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <numbers>
+#include <numeric>
+#include <string>
+
+#include <Eigen/Geometry>
+#include <Eigen/SVD>
+
+#include "common/error.hpp"
+#include "sh/brdf_operator.hpp"
+#include "visibility/parallel.hpp"
+
+namespace penumbra::visibility {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+Eigen::Matrix3d to_matrix(const float* r) {
+    Eigen::Matrix3d m;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) m(i, j) = r[3 * i + j];
+    return m;
+}
+
+// Running sums for Errors, merged across threads.
+struct ErrorSums {
+    double sq = 0.0, ao_abs = 0.0, ao_max = 0.0;
+    std::size_t n = 0;
+    void add(int order, const double* predicted, const float* truth) {
+        double diff[64], d2 = 0.0;
+        const int n_sh = order * order;
+        for (int i = 0; i < n_sh; ++i) {
+            diff[i] = predicted[i] - double(truth[i]);
+            d2 += diff[i] * diff[i];
+        }
+        sq += d2 / (4.0 * std::numbers::pi);
+        const double ao = std::abs(ambient_occlusion(order, diff));
+        ao_abs += ao;
+        ao_max = std::max(ao_max, ao);
+        ++n;
+    }
+    void merge(const ErrorSums& o) {
+        sq += o.sq;
+        ao_abs += o.ao_abs;
+        ao_max = std::max(ao_max, o.ao_max);
+        n += o.n;
+    }
+    Errors result() const {
+        Errors e;
+        e.samples = n;
+        if (n) {
+            e.sh_rms = std::sqrt(sq / double(n));
+            e.ao_mean_abs = ao_abs / double(n);
+            e.ao_max_abs = ao_max;
+        }
+        return e;
+    }
+};
+
+const std::vector<double>& ridge_grid() {
+    static const std::vector<double> grid{1e-8, 1e-6, 1e-5, 1e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1, 3e-1, 1.0, 10.0};
+    return grid;
+}
+
+void check_fit_settings(const FitSettings& s) {
+    if (s.lobes < 1 || s.lobes > max_lobes) throw ArgumentError("lobes must be in [1, 4], got " + std::to_string(s.lobes));
+    if (s.features != PoseFeatures::RotationMatrix && s.features != PoseFeatures::RotationVector)
+        throw ArgumentError("unknown pose features");
+    if (!(s.joint_tolerance_degrees >= 0.0)) throw ArgumentError("joint tolerance must be >= 0 degrees");
+    if (s.holdout_stride < 0 || s.holdout_stride == 1)
+        throw ArgumentError("holdout_stride must be 0 (none) or >= 2");
+    if (!(s.constant_tolerance >= 0.0) || !(s.prune_tolerance >= 0.0))
+        throw ArgumentError("tolerances must be >= 0");
+    if (s.zh_iterations < 0 || !(s.axis_prior >= 0.0)) throw ArgumentError("ZH fit settings out of range");
+    if (s.threads < 0) throw ArgumentError("threads must be >= 0");
+}
+
+}  // namespace
+
+int features_per_joint(PoseFeatures features) { return features == PoseFeatures::RotationVector ? 3 : 9; }
+
+void joint_features(PoseFeatures features, const float* rotation, double* out) {
+    if (features == PoseFeatures::RotationVector) {
+        const Eigen::AngleAxisd aa(to_matrix(rotation));
+        const Eigen::Vector3d v = aa.axis() * aa.angle();
+        for (int k = 0; k < 3; ++k) out[k] = v[k];
+    } else {
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) out[3 * i + j] = double(rotation[3 * i + j]) - (i == j ? 1.0 : 0.0);
+    }
+}
+
+double rotation_angle_between(const float* a, const float* b) {
+    const Eigen::Matrix3d r = to_matrix(a).transpose() * to_matrix(b);
+    const double c = std::clamp((r.trace() - 1.0) / 2.0, -1.0, 1.0);
+    return std::acos(c);
+}
+
+double ambient_occlusion(int order, const double* sh) {
+    static thread_local int cached_order = 0;
+    static thread_local std::vector<double> row;
+    if (cached_order != order) {
+        const sh::ZonalOperator t = sh::diffuse_zonal_operator(order);
+        row.assign(order, 0.0);
+        for (int l = 0; l < order; ++l) row[l] = t.blocks[0](0, l);
+        cached_order = order;
+    }
+    double s = 0.0;
+    for (int l = 0; l < order; ++l) s += row[l] * sh[l * (l + 1)];
+    return std::sqrt(4.0 * std::numbers::pi) * s;
+}
+
+std::vector<JointChoice> choose_active_joints(const TrainingSet& set, const std::vector<BoneInfluence>& influence,
+                                              double tolerance_degrees) {
+    const std::size_t n_bones = set.bone_names.size();
+    if (influence.size() != n_bones)
+        throw ArgumentError("one bone influence per armature bone is needed (" + std::to_string(n_bones) + "), got " +
+                            std::to_string(influence.size()));
+    std::vector<JointChoice> out(n_bones);
+    for (std::size_t b = 0; b < n_bones; ++b) {
+        JointChoice& c = out[b];
+        c.name = set.bone_names[b];
+        double largest = 0.0;
+        for (std::size_t f = 1; f < set.frames.size(); ++f)
+            largest = std::max(largest, rotation_angle_between(set.frames[0].bone_rotations.data() + 9 * b,
+                                                               set.frames[f].bone_rotations.data() + 9 * b));
+        c.max_angle_degrees = largest * 180.0 / std::numbers::pi;
+        char angle[64];
+        std::snprintf(angle, sizeof angle, "%.3g°", c.max_angle_degrees);
+        if (!influence[b].deforms_mesh)
+            c.reason = "dropped: deforms no vertex of this mesh (nor do its children)";
+        else if (influence[b].rigid_for_whole_mesh)
+            c.reason = "dropped: carries the whole mesh rigidly (cannot change self-occlusion)";
+        else if (c.max_angle_degrees <= tolerance_degrees)
+            c.reason = std::string("dropped: rotates at most ") + angle + " over the training frames";
+        else {
+            c.active = true;
+            c.reason = std::string("kept: rotates up to ") + angle + " and deforms part of the mesh";
+        }
+    }
+    return out;
+}
+
+void check_pose_model(const PoseModel& m) {
+    if (m.order < 1 || m.order > 8) throw ArgumentError("model SH order out of range");
+    if (m.lobes < 1 || m.lobes > max_lobes) throw ArgumentError("model lobe count out of range");
+    if (m.features != PoseFeatures::RotationMatrix && m.features != PoseFeatures::RotationVector)
+        throw ArgumentError("model pose features unknown");
+    const std::size_t d = m.params_per_vertex(), fpj = features_per_joint(m.features);
+    if (m.joints.size() > 65535) throw ArgumentError("too many joints");
+    if (m.joint_offsets.size() != m.vertex_count + 1) throw ArgumentError("model joint offsets do not match its vertex count");
+    if (m.joint_offsets.front() != 0 || m.joint_offsets.back() != m.joint_index.size())
+        throw ArgumentError("model joint offsets are inconsistent");
+    for (std::size_t v = 0; v < m.vertex_count; ++v)
+        if (m.joint_offsets[v + 1] < m.joint_offsets[v]) throw ArgumentError("model joint offsets decrease");
+    for (auto j : m.joint_index)
+        if (j >= m.joints.size()) throw ArgumentError("model joint index out of range");
+    if (m.bias.size() != m.vertex_count * d) throw ArgumentError("model bias size does not match");
+    if (m.weights.size() != m.joint_index.size() * fpj * d) throw ArgumentError("model weight size does not match");
+    for (float x : m.bias)
+        if (!std::isfinite(x)) throw ArgumentError("model has a non-finite value");
+    for (float x : m.weights)
+        if (!std::isfinite(x)) throw ArgumentError("model has a non-finite value");
+}
+
+PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence>& influence,
+                         const FitSettings& settings, const Progress& progress, FitReport* report_out) {
+    check_fit_settings(settings);
+    check_training_set(set);
+    if (set.settings.weighting != Weighting::Plain && set.settings.weighting != Weighting::Cosine)
+        throw ArgumentError("unknown weighting");
+    if (set.frames.empty()) throw ArgumentError("the training set has no frames");
+    if (set.vertex_count == 0) throw ArgumentError("the training set has no vertices");
+    const int order = set.settings.order, lobes = settings.lobes, n_sh = order * order;
+    const int ppl = params_per_lobe(order), d = lobes * ppl;
+    const std::size_t V = set.vertex_count, F = set.frames.size();
+    FitReport report;
+
+    // ZH lobes per vertex and frame (fig. 2b): rows of B.
+    const auto t_zh = Clock::now();
+    Eigen::MatrixXf B(F, V * d);
+    ErrorSums zh_errors;
+    std::mutex merge_mutex;
+    ZhFitSettings zs;
+    zs.order = order;
+    zs.lobes = lobes;
+    zs.iterations = settings.zh_iterations;
+    zs.axis_prior = settings.axis_prior;
+    parallel_chunks(V, 16, settings.threads, [&](std::size_t begin, std::size_t end) {
+        ErrorSums local;
+        std::vector<double> mean(n_sh), sh(n_sh), ref(d), params(d), fitted(n_sh);
+        for (std::size_t v = begin; v < end; ++v) {
+            std::fill(mean.begin(), mean.end(), 0.0);
+            for (const auto& frame : set.frames)
+                for (int i = 0; i < n_sh; ++i) mean[i] += frame.visibility[v * n_sh + i];
+            for (auto& x : mean) x /= double(F);
+            fit_zh_lobes(zs, mean.data(), nullptr, ref.data());
+            for (std::size_t f = 0; f < F; ++f) {
+                const float* truth = set.frames[f].visibility.data() + v * n_sh;
+                for (int i = 0; i < n_sh; ++i) sh[i] = truth[i];
+                fit_zh_lobes(zs, sh.data(), ref.data(), params.data());
+                for (int i = 0; i < d; ++i) B(f, v * d + i) = float(params[i]);
+                lobes_to_sh(order, lobes, params.data(), fitted.data());
+                local.add(order, fitted.data(), truth);
+            }
+        }
+        std::lock_guard<std::mutex> lock(merge_mutex);
+        zh_errors.merge(local);
+    }, progress, 0.0, 0.8);
+    report.zh_fit = zh_errors.result();
+    report.seconds_zh_fit = seconds_since(t_zh);
+
+    // Active joints and the pose matrix A (without its bias column).
+    const auto t_linear = Clock::now();
+    report.joints = choose_active_joints(set, influence, settings.joint_tolerance_degrees);
+    std::vector<std::size_t> active;
+    for (std::size_t b = 0; b < report.joints.size(); ++b)
+        if (report.joints[b].active) active.push_back(b);
+    if (active.size() > 65535) throw ArgumentError("too many active joints");
+    const int fpj = features_per_joint(settings.features);
+    const std::size_t k = active.size() * fpj;
+    Eigen::MatrixXd A(F, k);
+    for (std::size_t f = 0; f < F; ++f)
+        for (std::size_t j = 0; j < active.size(); ++j) {
+            double phi[9];
+            joint_features(settings.features, set.frames[f].bone_rotations.data() + 9 * active[j], phi);
+            for (int a = 0; a < fpj; ++a) A(f, j * fpj + a) = phi[a];
+        }
+
+    // Held-out frames: every k-th, when there are enough frames.
+    std::vector<std::size_t> train, holdout;
+    const int stride = settings.holdout_stride;
+    const bool use_holdout = stride >= 2 && F >= std::size_t(2 * stride);
+    for (std::size_t f = 0; f < F; ++f)
+        (use_holdout && f % stride == std::size_t(stride - 1) ? holdout : train).push_back(f);
+    report.training_frames = F;
+    report.holdout_frames = holdout.size();
+
+    // Ridge solution pieces for a subset of frames: centred SVD and Uᵀ·B_c.
+    struct Solver {
+        Eigen::VectorXd feature_mean, s;
+        Eigen::MatrixXd V;
+        Eigen::MatrixXf ut_b;
+        Eigen::RowVectorXf b_mean;
+    };
+    auto make_solver = [&](const std::vector<std::size_t>& rows) {
+        Solver sol;
+        Eigen::MatrixXd a(rows.size(), k);
+        Eigen::MatrixXf b(rows.size(), V * d);
+        for (std::size_t r = 0; r < rows.size(); ++r) {
+            a.row(r) = A.row(rows[r]);
+            b.row(r) = B.row(rows[r]);
+        }
+        sol.feature_mean = a.colwise().mean().transpose();
+        sol.b_mean = b.colwise().mean();
+        if (k == 0) return sol;
+        a.rowwise() -= sol.feature_mean.transpose();
+        b.rowwise() -= sol.b_mean;
+        // JacobiSVD: BDCSVD (Eigen 3.4) returned NaN now and then on the exactly
+        // zero columns that unmoving feature entries leave.
+        Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+        sol.s = svd.singularValues();
+        sol.V = svd.matrixV();
+        sol.ut_b = svd.matrixU().transpose().cast<float>() * b;
+        return sol;
+    };
+    auto shrink = [](const Solver& sol, double rho) {
+        const double smax = sol.s.size() ? sol.s[0] : 0.0;
+        const double lambda = rho * smax * smax;
+        Eigen::VectorXd w(sol.s.size());
+        for (Eigen::Index i = 0; i < sol.s.size(); ++i) {
+            const double s = sol.s[i];
+            w[i] = s > 1e-12 * smax ? s / (s * s + lambda) : 0.0;
+        }
+        return w;
+    };
+    // Errors of params predicted for `rows` (rows.size() × V·d) against their baked SH.
+    auto sh_errors = [&](const std::vector<std::size_t>& rows, const Eigen::MatrixXf& predicted) {
+        ErrorSums total;
+        parallel_chunks(V, 256, settings.threads, [&](std::size_t begin, std::size_t end) {
+            ErrorSums local;
+            std::vector<double> params(d), sh(n_sh);
+            for (std::size_t v = begin; v < end; ++v)
+                for (std::size_t r = 0; r < rows.size(); ++r) {
+                    for (int i = 0; i < d; ++i) params[i] = predicted(r, v * d + i);
+                    lobes_to_sh(order, lobes, params.data(), sh.data());
+                    local.add(order, sh.data(), set.frames[rows[r]].visibility.data() + v * n_sh);
+                }
+            std::lock_guard<std::mutex> lock(merge_mutex);
+            total.merge(local);
+        }, Progress{});
+        return total.result();
+    };
+
+    // Choose λ on the held-out frames.
+    double rho = 1e-4;
+    if (!holdout.empty()) {
+        const Solver sol = make_solver(train);
+        Eigen::MatrixXd p(holdout.size(), k);
+        for (std::size_t r = 0; r < holdout.size(); ++r) p.row(r) = A.row(holdout[r]) - sol.feature_mean.transpose();
+        const Eigen::MatrixXd pv = k ? Eigen::MatrixXd(p * sol.V) : Eigen::MatrixXd(holdout.size(), 0);
+        double best = std::numeric_limits<double>::infinity();
+        const std::vector<double> grid = k ? ridge_grid() : std::vector<double>{rho};
+        for (std::size_t g = 0; g < grid.size(); ++g) {
+            Eigen::MatrixXf predicted = sol.b_mean.replicate(holdout.size(), 1);
+            if (k) predicted += (pv * shrink(sol, grid[g]).asDiagonal()).cast<float>() * sol.ut_b;
+            const Errors e = sh_errors(holdout, predicted);
+            report.ridge_curve.emplace_back(grid[g], e.sh_rms);
+            if (e.sh_rms < best) {
+                best = e.sh_rms;
+                rho = grid[g];
+                report.model_holdout = e;
+            }
+            progress.report(0.8 + 0.1 * double(g + 1) / double(grid.size()));
+        }
+    }
+    report.ridge_relative = rho;
+
+    // Refit on every frame: W = V·diag(s/(s²+λ))·Uᵀ·B_c (k × V·d).
+    std::vector<std::size_t> all(F);
+    std::iota(all.begin(), all.end(), std::size_t(0));
+    const Solver sol = make_solver(all);
+    Eigen::MatrixXf W;
+    if (k) W = (sol.V * shrink(sol, rho).asDiagonal()).cast<float>() * sol.ut_b;
+    Eigen::MatrixXd Ac = A;
+    if (k) Ac.rowwise() -= sol.feature_mean.transpose();
+
+    // Per vertex: constant, or the joints that matter.
+    std::vector<std::vector<std::uint16_t>> kept(V);
+    PoseModel model;
+    model.bias.assign(V * d, 0.0f);
+    ErrorSums train_errors;
+    const std::size_t n_active = active.size();
+    parallel_chunks(V, 64, settings.threads, [&](std::size_t begin, std::size_t end) {
+        ErrorSums local;
+        Eigen::MatrixXd contrib(F, d), dropped(F, d), trial(F, d), prediction(F, d);
+        std::vector<Eigen::MatrixXd> parts(n_active);
+        std::vector<std::pair<double, std::size_t>> norms(n_active);
+        std::vector<double> params(d), sh(n_sh);
+        for (std::size_t v = begin; v < end; ++v) {
+            const Eigen::RowVectorXd mean = sol.b_mean.segment(v * d, d).cast<double>();
+            double variation = 0.0;
+            for (std::size_t f = 0; f < F; ++f)
+                for (int i = 0; i < d; ++i) variation += std::pow(double(B(f, v * d + i)) - mean[i], 2);
+            variation = std::sqrt(variation / double(F * d));
+            std::vector<std::uint16_t>& keep = kept[v];
+            prediction = mean.replicate(F, 1);
+            if (k && variation > settings.constant_tolerance) {
+                const Eigen::MatrixXd Wv = W.middleCols(v * d, d).cast<double>();
+                for (std::size_t j = 0; j < n_active; ++j) {
+                    parts[j] = Ac.middleCols(j * fpj, fpj) * Wv.middleRows(j * fpj, fpj);
+                    norms[j] = {parts[j].squaredNorm(), j};
+                }
+                std::sort(norms.begin(), norms.end());
+                dropped.setZero();
+                std::size_t first_kept = 0;
+                for (; first_kept < n_active; ++first_kept) {
+                    trial = dropped + parts[norms[first_kept].second];
+                    if (std::sqrt(trial.squaredNorm() / double(F * d)) > settings.prune_tolerance) break;
+                    dropped = trial;
+                }
+                for (std::size_t e = first_kept; e < n_active; ++e) keep.push_back(std::uint16_t(norms[e].second));
+                std::sort(keep.begin(), keep.end());
+                for (auto j : keep) prediction += parts[j];
+            }
+            // Bias with the feature means folded in: params = bias + Σ φ_j W_j.
+            Eigen::RowVectorXd bias = mean;
+            for (auto j : keep)
+                bias -= sol.feature_mean.segment(j * fpj, fpj).transpose() *
+                        W.block(j * fpj, v * d, fpj, d).cast<double>();
+            for (int i = 0; i < d; ++i) model.bias[v * d + i] = float(bias[i]);
+            for (std::size_t f = 0; f < F; ++f) {
+                for (int i = 0; i < d; ++i) params[i] = prediction(f, i);
+                lobes_to_sh(order, lobes, params.data(), sh.data());
+                local.add(order, sh.data(), set.frames[f].visibility.data() + v * n_sh);
+            }
+        }
+        std::lock_guard<std::mutex> lock(merge_mutex);
+        train_errors.merge(local);
+    }, progress, 0.9, 1.0);
+    report.model_training = train_errors.result();
+
+    model.order = order;
+    model.lobes = lobes;
+    model.rays = set.settings.rays;
+    model.below_horizon = set.settings.below_horizon;
+    model.features = settings.features;
+    model.vertex_count = V;
+    model.topology_hash = set.topology_hash;
+    model.armature_bones = set.bone_names;
+    for (auto b : active) model.joints.push_back(set.bone_names[b]);
+    model.joint_offsets.assign(V + 1, 0);
+    for (std::size_t v = 0; v < V; ++v) {
+        model.joint_offsets[v + 1] = model.joint_offsets[v] + std::uint32_t(kept[v].size());
+        if (kept[v].empty()) ++report.constant_vertices;
+    }
+    model.joint_index.reserve(model.joint_offsets[V]);
+    model.weights.reserve(std::size_t(model.joint_offsets[V]) * fpj * d);
+    for (std::size_t v = 0; v < V; ++v)
+        for (auto j : kept[v]) {
+            model.joint_index.push_back(j);
+            for (int a = 0; a < fpj; ++a)
+                for (int i = 0; i < d; ++i) model.weights.push_back(W(j * fpj + a, v * d + i));
+        }
+    report.stored_joint_blocks = model.joint_index.size();
+    report.seconds_linear = seconds_since(t_linear);
+    report.model_bytes = 4 * model.joint_offsets.size() + 2 * model.joint_index.size() + 4 * model.bias.size() +
+                         4 * model.weights.size();
+    report.dense_bytes = 4 * std::size_t(d) * (k + 1) * V;
+    if (report.holdout_frames == 0) report.model_holdout = Errors{};
+
+    model.summary = {
+        {"frames", double(F)},
+        {"holdout_frames", double(report.holdout_frames)},
+        {"active_joints", double(active.size())},
+        {"zh_fit_sh_rms", report.zh_fit.sh_rms},
+        {"zh_fit_ao_mean_abs", report.zh_fit.ao_mean_abs},
+        {"training_sh_rms", report.model_training.sh_rms},
+        {"training_ao_mean_abs", report.model_training.ao_mean_abs},
+        {"holdout_sh_rms", report.model_holdout.sh_rms},
+        {"holdout_ao_mean_abs", report.model_holdout.ao_mean_abs},
+        {"holdout_ao_max_abs", report.model_holdout.ao_max_abs},
+        {"ridge_relative", rho},
+        {"constant_vertices", double(report.constant_vertices)},
+        {"stored_joint_blocks", double(report.stored_joint_blocks)},
+        {"model_bytes", double(report.model_bytes)},
+        {"dense_bytes", double(report.dense_bytes)},
+        {"seconds_zh_fit", report.seconds_zh_fit},
+        {"seconds_linear", report.seconds_linear},
+    };
+    if (report_out) *report_out = std::move(report);
+    return model;
+}
+
+void synthesize_params(const PoseModel& model, const float* joint_rotations, float* params_out, int threads) {
+    const int d = model.params_per_vertex(), fpj = features_per_joint(model.features);
+    std::vector<double> phi(model.joints.size() * fpj);
+    for (std::size_t j = 0; j < model.joints.size(); ++j) {
+        for (int k = 0; k < 9; ++k)
+            if (!std::isfinite(joint_rotations[9 * j + k]))
+                throw ArgumentError("joint rotation of '" + model.joints[j] + "' is not finite");
+        joint_features(model.features, joint_rotations + 9 * j, phi.data() + j * fpj);
+    }
+    parallel_chunks(model.vertex_count, 1024, threads, [&](std::size_t begin, std::size_t end) {
+        std::vector<double> acc(d);
+        for (std::size_t v = begin; v < end; ++v) {
+            for (int i = 0; i < d; ++i) acc[i] = model.bias[v * d + i];
+            for (std::uint32_t e = model.joint_offsets[v]; e < model.joint_offsets[v + 1]; ++e) {
+                const double* f = phi.data() + std::size_t(model.joint_index[e]) * fpj;
+                const float* w = model.weights.data() + std::size_t(e) * fpj * d;
+                for (int a = 0; a < fpj; ++a)
+                    for (int i = 0; i < d; ++i) acc[i] += f[a] * w[a * d + i];
+            }
+            for (int i = 0; i < d; ++i) params_out[v * d + i] = float(acc[i]);
+        }
+    }, Progress{});
+}
+
+void params_to_lobes(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
+                     float* bands_out) {
+    const int ppl = params_per_lobe(order);
+    for (std::size_t v = 0; v < vertex_count; ++v)
+        for (int x = 0; x < lobes; ++x) {
+            const float* p = params + (v * lobes + x) * ppl;
+            const Eigen::Vector3d axis = lambert_to_axis(p[0], p[1]);
+            float* a = axes_out + (v * lobes + x) * 3;
+            for (int k = 0; k < 3; ++k) a[k] = float(axis[k]);
+            float* b = bands_out + (v * lobes + x) * order;
+            for (int l = 0; l < order; ++l) b[l] = p[2 + l];
+        }
+}
+
+Errors evaluate_pose_model(const PoseModel& model, const TrainingSet& set, int threads) {
+    check_pose_model(model);
+    check_training_set(set);
+    if (set.vertex_count != model.vertex_count) throw ArgumentError("the frames were baked from another mesh");
+    if (set.settings.order != model.order) throw ArgumentError("the frames were baked at another SH order");
+    std::vector<std::size_t> bone_of(model.joints.size());
+    for (std::size_t j = 0; j < model.joints.size(); ++j) {
+        auto it = std::find(set.bone_names.begin(), set.bone_names.end(), model.joints[j]);
+        if (it == set.bone_names.end()) throw ArgumentError("the frames lack the model's joint '" + model.joints[j] + "'");
+        bone_of[j] = std::size_t(it - set.bone_names.begin());
+    }
+    const int d = model.params_per_vertex(), n_sh = model.order * model.order;
+    ErrorSums total;
+    std::vector<float> rotations(9 * model.joints.size()), params(model.vertex_count * d);
+    for (const auto& frame : set.frames) {
+        for (std::size_t j = 0; j < bone_of.size(); ++j)
+            std::copy_n(frame.bone_rotations.data() + 9 * bone_of[j], 9, rotations.data() + 9 * j);
+        synthesize_params(model, rotations.data(), params.data(), threads);
+        std::vector<double> p(d), sh(n_sh);
+        for (std::size_t v = 0; v < model.vertex_count; ++v) {
+            for (int i = 0; i < d; ++i) p[i] = params[v * d + i];
+            lobes_to_sh(model.order, model.lobes, p.data(), sh.data());
+            total.add(model.order, sh.data(), frame.visibility.data() + v * n_sh);
+        }
+    }
+    return total.result();
+}
+
+}  // namespace penumbra::visibility

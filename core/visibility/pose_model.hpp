@@ -1,0 +1,159 @@
+// The linear pose-space model of ZH visibility (paper §3.1, fig. 2c, and the
+// run-time step 1 of §4.3): per vertex, lobe parameters = A · X, with A the
+// pose vector of the active joints plus a bias.
+//
+// Pose vector. Each active joint contributes its rotation relative to rest,
+// in its parent's space (Blender: rest-relative local rotation, constraints
+// and IK included), as the 9 entries of R − I (PoseFeatures::RotationMatrix,
+// the default) or as its rotation vector (axis·angle, PoseFeatures::
+// RotationVector). The matrix form is continuous everywhere (no double cover
+// as with quaternions, no wrap at π as with the rotation vector or Euler
+// angles), and linear-blend skinning moves every vertex linearly in exactly
+// these entries, so the geometry the visibility comes from is linear in
+// them; the rotation vector is 3 numbers instead of 9 and is continuous for
+// rotations below π. A bias column (the constant 1) completes A.
+//
+// Active joints (the paper's j): bones that rotate by more than a tolerance
+// over the training frames AND move part of this mesh relative to the rest
+// of it (a bone that deforms no vertex, directly or through its children,
+// or that carries the whole mesh rigidly, cannot change self-occlusion).
+//
+// Fit. Per frame and vertex, ZH lobes (zh_fit.hpp) make the rows of B. The
+// columns of A are centred, and X solves the ridge problem
+//   min |A_c X − B_c|² + λ |X|²
+// through one SVD of A_c shared by every vertex; λ = ρ·s_max² is chosen from
+// a fixed grid of ρ by the SH error on held-out frames (every k-th frame),
+// then X is refitted on all frames. Rank deficiency (more columns than
+// frames, repeated frames, joints that never move) only adds zero singular
+// values, which ridge handles.
+//
+// Model only what the scene requires: a vertex whose lobe parameters vary by
+// less than constant_tolerance (RMS) over the training frames stores a
+// constant; for the others, joints whose contribution is small are dropped
+// greedily (smallest first) while the dropped part stays under
+// prune_tolerance (RMS over the training frames).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/progress.hpp"
+#include "visibility/visibility_bake.hpp"
+#include "visibility/zh_fit.hpp"
+
+namespace penumbra::visibility {
+
+enum class PoseFeatures : std::uint32_t { RotationMatrix = 0, RotationVector = 1 };
+
+int features_per_joint(PoseFeatures features);
+
+// One joint's features from its rotation (row-major 3×3): R − I, or the
+// rotation vector.
+void joint_features(PoseFeatures features, const float* rotation, double* out);
+
+// Angle (radians) of the rotation between two row-major 3×3 rotations.
+double rotation_angle_between(const float* a, const float* b);
+
+// What the caller (Blender) knows about each bone of the armature, in the
+// order of TrainingSet::bone_names.
+struct BoneInfluence {
+    bool deforms_mesh = true;          // the bone or a child carries weight on some vertex of this mesh
+    bool rigid_for_whole_mesh = false; // every weighted vertex is fully carried by this bone's subtree
+};
+
+struct JointChoice {
+    std::string name;
+    bool active = false;
+    double max_angle_degrees = 0.0;  // largest rotation away from the first training frame
+    std::string reason;              // why kept or dropped
+};
+
+std::vector<JointChoice> choose_active_joints(const TrainingSet& set, const std::vector<BoneInfluence>& influence,
+                                              double tolerance_degrees);
+
+struct FitSettings {
+    int lobes = 2;
+    PoseFeatures features = PoseFeatures::RotationMatrix;
+    double joint_tolerance_degrees = 1.0;
+    int holdout_stride = 4;              // every k-th frame held out to choose λ; 0: none
+    double constant_tolerance = 0.01;    // RMS lobe-parameter variation under which a vertex is constant
+    double prune_tolerance = 0.01;       // RMS lobe-parameter change allowed by per-vertex joint pruning
+    int zh_iterations = 8;
+    double axis_prior = 1.0;     // see zh_fit.hpp; 1 measured best for the linear model (docs/visibility.md)
+    int threads = 0;
+};
+
+// Errors of SH visibility, each over (vertex, frame) pairs:
+//   sh_rms: sqrt(mean |Δv|²/4π), the RMS difference of the visibility
+//           function over the sphere (0: exact, 1: everything wrong);
+//   ao_mean_abs: mean |Δ ambient occlusion| (the diffuse shade under a
+//           uniform unit World, what the add-on writes under that light);
+//   ao_max_abs: the largest.
+struct Errors {
+    double sh_rms = 0.0;
+    double ao_mean_abs = 0.0;
+    double ao_max_abs = 0.0;
+    std::size_t samples = 0;
+};
+
+struct FitReport {
+    std::vector<JointChoice> joints;
+    std::size_t training_frames = 0, holdout_frames = 0;
+    Errors zh_fit;            // ZH lobes vs baked SH, every frame
+    Errors model_training;    // final (pruned) model vs baked SH, every frame
+    Errors model_holdout;     // model fitted without the held-out frames vs them (λ chosen on them too)
+    double ridge_relative = 0.0;                          // ρ: λ = ρ·s_max²
+    std::vector<std::pair<double, double>> ridge_curve;   // (ρ, held-out sh_rms)
+    std::size_t constant_vertices = 0;
+    std::size_t stored_joint_blocks = 0;   // Σ over vertices of joints kept
+    std::size_t model_bytes = 0;           // stored payload
+    std::size_t dense_bytes = 0;           // float32 d·(features·j + 1)·v, as the paper's O(djv)
+    double seconds_zh_fit = 0.0, seconds_linear = 0.0;
+};
+
+struct PoseModel {
+    int order = 4;
+    int lobes = 2;
+    int rays = 0;
+    BelowHorizon below_horizon = BelowHorizon::Occluded;
+    PoseFeatures features = PoseFeatures::RotationMatrix;
+    std::uint64_t vertex_count = 0;
+    std::uint64_t topology_hash = 0;
+    std::vector<std::string> armature_bones;  // every bone of the armature at bake time
+    std::vector<std::string> joints;          // active joints, in pose-vector order
+    // Per vertex v: params = bias[v] + Σ_{e in [offsets[v], offsets[v+1])}
+    //                  features(joint_index[e]) · weights[e] (features_per_joint × d).
+    std::vector<std::uint32_t> joint_offsets;  // vertex_count + 1
+    std::vector<std::uint16_t> joint_index;
+    std::vector<float> bias;                   // vertex_count × d
+    std::vector<float> weights;                // blocks × features_per_joint × d
+    // Summary of the bake, stored with the model (name, value).
+    std::vector<std::pair<std::string, double>> summary;
+
+    int params_per_vertex() const { return lobes * params_per_lobe(order); }
+};
+
+// Throws ArgumentError when the model is inconsistent (sizes, indices).
+void check_pose_model(const PoseModel& model);
+
+PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence>& influence,
+                         const FitSettings& settings, const Progress& progress = {}, FitReport* report = nullptr);
+
+// Run time (§4.3 step 1): joint_rotations is joints × 9 (row-major, in
+// model.joints order); writes vertex_count × d lobe parameters.
+void synthesize_params(const PoseModel& model, const float* joint_rotations, float* params_out, int threads = 0);
+
+// Lobe parameters → axes in the local frame (V × lobes × 3) and zonal bands
+// (V × lobes × order), ready for Eq. 1.
+void params_to_lobes(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
+                     float* bands_out);
+
+// Errors of the model against baked frames (e.g. poses it never saw). The
+// set's bones must include every model joint.
+Errors evaluate_pose_model(const PoseModel& model, const TrainingSet& set, int threads = 0);
+
+// The diffuse AO of an SH visibility vector: √(4π)·(T_diffuse v)_00.
+double ambient_occlusion(int order, const double* sh);
+
+}  // namespace penumbra::visibility

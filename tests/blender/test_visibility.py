@@ -1,0 +1,450 @@
+"""The visibility baker inside real Blender (3.4 and 4.5): bake a procedurally
+rigged character with the operator, shade poses it never saw through the
+frame-change handler, and check the result against Blender's own ray caster
+(mathutils BVHTree, independent of Embree and of the SH code)."""
+
+import json
+import math
+import os
+import sys
+import tempfile
+
+import bpy
+import numpy as np
+import pytest
+from mathutils import Vector
+from mathutils.bvhtree import BVHTree
+
+import penumbra
+from penumbra import native
+from penumbra.visibility import bake, runtime, scene_data
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import visibility_character  # noqa: E402
+
+# Held-out error allowed (mean |Δ AO| over vertices and held-out frames); see
+# docs/visibility.md ("Accuracy threshold").
+HOLDOUT_AO_THRESHOLD = 0.03
+# Handler output vs Blender's own ray-cast AO on unseen poses; see docs/visibility.md.
+INDEPENDENT_AO_THRESHOLD = 0.04
+
+
+@pytest.fixture
+def addon(factory_scene):
+    penumbra.register()
+    try:
+        yield factory_scene
+    finally:
+        runtime.forget()
+        penumbra.unregister()
+
+
+def character(scene, tmp_path=None, frames=24):
+    obj, rig = visibility_character.build(frames=frames)
+    bpy.context.view_layer.objects.active = obj
+    obj.select_set(True)
+    return obj, rig
+
+
+def bake_op(tmp_dir, **kwargs):
+    args = dict(frame_start=1, frame_end=24, frame_step=2, rays=64, lobes=2,
+                filepath=os.path.join(str(tmp_dir), "model.pzh"))
+    args.update(kwargs)
+    return bpy.ops.penumbra.bake_visibility(**args)
+
+
+def attribute(obj, name, width):
+    data = obj.data.attributes[name].data
+    out = np.empty(len(data) * width, dtype=np.float32)
+    data.foreach_get("color" if width == 4 else "value", out)
+    return out.reshape(-1, width) if width > 1 else out
+
+
+def uniform_world(scene, rgb=(1.0, 1.0, 1.0), strength=1.0):
+    world = bpy.data.worlds.new("Uniform")
+    world.use_nodes = True
+    background = world.node_tree.nodes["Background"]
+    background.inputs["Color"].default_value = (*rgb, 1.0)
+    background.inputs["Strength"].default_value = strength
+    scene.world = world
+    return world
+
+
+def blender_ao(obj, indices, rays=400, seed=3):
+    """Cosine-weighted visibility by Blender's own BVH (upper hemisphere, cosine-distributed rays)."""
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    evaluated = obj.evaluated_get(depsgraph)
+    mesh = evaluated.to_mesh()
+    try:
+        world = evaluated.matrix_world
+        verts = [world @ v.co for v in mesh.vertices]
+        mesh.calc_loop_triangles()
+        tris = [tuple(t.vertices) for t in mesh.loop_triangles]
+        normals = scene_data._vertex_normals(mesh)
+    finally:
+        evaluated.to_mesh_clear()
+    tree = BVHTree.FromPolygons(verts, tris)
+    diagonal = (Vector(np.max(np.array(verts), axis=0)) - Vector(np.min(np.array(verts), axis=0))).length
+    rng = np.random.default_rng(seed)
+    out = []
+    for i in indices:
+        n = Vector(normals[i]).normalized()
+        t = n.orthogonal().normalized()
+        b = n.cross(t)
+        origin = verts[i] + 1e-4 * diagonal * n
+        u1, u2 = rng.random(rays), rng.random(rays)
+        r, phi = np.sqrt(u1), 2 * np.pi * u2
+        free = 0
+        for k in range(rays):
+            d = r[k] * math.cos(phi[k]) * t + r[k] * math.sin(phi[k]) * b + math.sqrt(max(0.0, 1 - u1[k])) * n
+            hit = tree.ray_cast(origin, d)
+            free += hit[0] is None
+        out.append(free / rays)
+    return np.array(out)
+
+
+def test_bake_operator_writes_a_model_and_reports_the_joints(addon, tmp_path):
+    obj, rig = character(addon)
+    assert bake_op(tmp_path) == {"FINISHED"}
+    s = obj.penumbra_visibility
+    assert os.path.isfile(s.model_path)
+    summary = json.loads(s.report)
+    assert set(summary["active_joints"]) == {"head", "upper_arm.L", "forearm.L", "upper_arm.R", "forearm.R"}
+    assert "rigidly" in summary["dropped_joints"]["root"]
+    assert "rigidly" in summary["dropped_joints"]["spine"]
+    assert "deforms no vertex" in summary["dropped_joints"]["control"]
+    assert summary["frames"] == 12 and summary["holdout_frames"] == 3
+    assert summary["model_holdout"]["ao_mean_abs"] < HOLDOUT_AO_THRESHOLD
+    assert summary["zh_fit"]["sh_rms"] < summary["model_holdout"]["sh_rms"]
+    assert summary["model_bytes"] < summary["dense_bytes"]
+    assert summary["constant_vertices"] > 0
+    model = native.module.VisibilityPoseModel.load(s.model_path)
+    assert model.vertex_count == len(obj.data.vertices)
+    assert model.joints == [j for j in rig.pose.bones.keys() if j in summary["active_joints"]]
+
+
+def test_unseen_poses_are_shaded_by_the_handler_and_match_blender_ray_casts(addon, tmp_path):
+    obj, rig = character(addon)
+    uniform_world(addon)
+    assert bake_op(tmp_path) == {"FINISHED"}
+    obj.penumbra_visibility.enabled = True
+    # Torso vertices facing the arms (their occlusion changes with the pose).
+    positions = np.array([v.co for v in obj.data.vertices])
+    torso = np.where((np.abs(positions[:, 0]) > 0.2) & (positions[:, 2] > 1.0) & (positions[:, 2] < 1.75) &
+                     (np.abs(positions[:, 0]) < 0.35))[0][::3][:40]
+    assert len(torso) >= 20
+    seen = []
+    errors = []
+    for frame in (6, 10, 14):  # even frames: never baked (the bake used 1, 3, 5, ...)
+        addon.frame_set(frame)
+        ao = attribute(obj, "penumbra_visibility", 1)
+        rgb = attribute(obj, "penumbra_shading", 4)
+        seen.append(ao.copy())
+        reference = blender_ao(obj, torso)
+        errors.append(np.abs(ao[torso] - reference).mean())
+        # Uniform World of radiance 1, diffuse: the shading is the visibility.
+        inside = ao < 0.999
+        np.testing.assert_allclose(rgb[inside, :3], np.repeat(ao[inside, None], 3, axis=1), atol=2e-4)
+        assert obj.penumbra_visibility.status == ""
+    print("handler AO vs Blender BVH AO, per frame:", errors)
+    assert max(errors) < INDEPENDENT_AO_THRESHOLD
+    # The poses differ, and so does the shading.
+    assert np.abs(seen[0] - seen[1]).max() > 0.05
+
+
+def test_world_colour_strength_and_environment_rotation_are_honoured(addon, tmp_path):
+    obj, rig = character(addon)
+    world = uniform_world(addon, (0.5, 0.25, 1.0), 2.0)
+    assert bake_op(tmp_path) == {"FINISHED"}
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    ao = attribute(obj, "penumbra_visibility", 1)
+    rgb = attribute(obj, "penumbra_shading", 4)[:, :3]
+    inside = ao < 0.999
+    np.testing.assert_allclose(rgb[inside], ao[inside, None] * np.array([1.0, 0.5, 2.0]), rtol=1e-4, atol=1e-5)
+    # An environment image: bright sky above the horizon, black below.
+    image = bpy.data.images.new("Sky", 64, 32, float_buffer=True)
+    pixels = np.zeros((32, 64, 4), dtype=np.float32)
+    pixels[16:, :, :3] = 1.0  # Blender rows are bottom-up: rows 16..31 are the upper half
+    pixels[..., 3] = 1.0
+    image.pixels.foreach_set(pixels.ravel())
+    tree = world.node_tree
+    env = tree.nodes.new("ShaderNodeTexEnvironment")
+    env.image = image
+    mapping = tree.nodes.new("ShaderNodeMapping")
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    tree.links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+    tree.links.new(mapping.outputs["Vector"], env.inputs["Vector"])
+    tree.links.new(env.outputs["Color"], tree.nodes["Background"].inputs["Color"])
+    tree.nodes["Background"].inputs["Strength"].default_value = 1.0
+    top = int(np.argmax([v.co.z for v in obj.data.vertices]))  # top of the head, facing up
+    bottom = int(np.argmin([v.co.z for v in obj.data.vertices]))  # bottom of the torso, facing down
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    upright = attribute(obj, "penumbra_shading", 4)[:, 0].copy()
+    # Turn the World upside down with the Mapping node: the sky is now below.
+    mapping.inputs["Rotation"].default_value = (math.pi, 0.0, 0.0)
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    flipped = attribute(obj, "penumbra_shading", 4)[:, 0].copy()
+    assert upright[top] > 0.8 and flipped[top] < 0.2
+    assert flipped[bottom] > upright[bottom] + 0.5
+
+
+def test_view_dependent_brdfs_use_the_scene_camera(addon, tmp_path):
+    obj, rig = character(addon)
+    uniform_world(addon)
+    assert bake_op(tmp_path) == {"FINISHED"}
+    s = obj.penumbra_visibility
+    s.brdf = "PHONG"
+    s.phong_exponent = 8.0
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    addon.collection.objects.link(camera)
+    addon.camera = camera
+    camera.location = (0.0, -6.0, 1.5)
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    front = attribute(obj, "penumbra_shading", 4)[:, 0].copy()
+    camera.location = (0.0, 6.0, 1.5)
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    back = attribute(obj, "penumbra_shading", 4)[:, 0].copy()
+    assert np.abs(front - back).max() > 1e-3
+    s.brdf = "TRANSLUCENT"
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    translucent = attribute(obj, "penumbra_shading", 4)[:, 0]
+    ao = attribute(obj, "penumbra_visibility", 1)
+    # Under uniform light the back lobe adds transmission × 1 on top of the AO.
+    assert np.all(translucent >= ao - 1e-4)
+
+
+def test_setup_material_shows_the_shading_in_a_cycles_render(addon, tmp_path):
+    obj, rig = character(addon)
+    uniform_world(addon, (1.0, 1.0, 1.0), 1.0)
+    assert bake_op(tmp_path) == {"FINISHED"}
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    assert bpy.ops.penumbra.setup_material() == {"FINISHED"}
+    material = obj.active_material
+    node = material.node_tree.nodes["Penumbra Shading"]
+    assert node.attribute_name == "penumbra_shading"
+    assert node.outputs["Color"].is_linked
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    addon.collection.objects.link(camera)
+    addon.camera = camera
+    camera.location = (0.0, -7.0, 1.4)
+    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
+    addon.world = None  # black background, so only the emission shows
+    addon.render.engine = "CYCLES"
+    addon.cycles.samples = 1
+    addon.cycles.use_denoising = False
+    addon.render.resolution_x, addon.render.resolution_y = 32, 32
+    addon.render.filepath = os.path.join(str(tmp_path), "render.png")
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(addon.render.filepath)
+    pixels = np.array(image.pixels[:]).reshape(32, 32, 4)
+    assert pixels[16, 16, :3].max() > 0.2  # the torso, lit by its baked shading
+    assert pixels[2, 2, :3].max() < 0.02   # the background
+
+
+def test_model_path_and_report_are_saved_with_the_blend(addon, tmp_path):
+    obj, rig = character(addon)
+    name = obj.name
+    path = os.path.join(str(tmp_path), "scene.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=path)
+    assert bpy.ops.penumbra.bake_visibility(frame_start=1, frame_end=24, frame_step=4, rays=32) == {"FINISHED"}
+    model_path = obj.penumbra_visibility.model_path
+    assert os.path.dirname(model_path) == str(tmp_path)  # next to the .blend
+    bpy.ops.wm.save_mainfile()
+    bpy.ops.wm.open_mainfile(filepath=path)
+    reloaded = bpy.data.objects[name]
+    assert reloaded.penumbra_visibility.model_path == model_path
+    assert json.loads(reloaded.penumbra_visibility.report)["frames"] == 6
+
+
+def test_unsaved_file_bakes_into_the_temporary_folder(addon):
+    obj, rig = character(addon)
+    assert bpy.data.filepath == ""
+    assert bake.default_model_path(obj).startswith(tempfile.gettempdir())
+
+
+def test_pieces_baked_separately_merge_into_the_same_model(addon, tmp_path):
+    obj, rig = character(addon)
+    core = native.module
+    _, first = bake.bake_training_set(bpy.context, obj, 1, 11, 2, rays=64)
+    _, second = bake.bake_training_set(bpy.context, obj, 13, 23, 2, rays=64)
+    first.save(os.path.join(str(tmp_path), "a.pvis"))
+    second.save(os.path.join(str(tmp_path), "b.pvis"))
+    pieces = [core.VisibilityTrainingSet.load(os.path.join(str(tmp_path), n)) for n in ("b.pvis", "a.pvis")]
+    _, merged = bake.fit_and_store(obj, pieces, 2, os.path.join(str(tmp_path), "merged.pzh"))
+    assert bake_op(tmp_path, filepath=os.path.join(str(tmp_path), "whole.pzh")) == {"FINISHED"}
+    whole = json.loads(obj.penumbra_visibility.report)
+    assert merged["frames"] == whole["frames"] == 12
+    assert merged["model_holdout"]["sh_rms"] == pytest.approx(whole["model_holdout"]["sh_rms"], rel=1e-6)
+    assert merged["active_joints"] == whole["active_joints"]
+
+
+# Bad input ------------------------------------------------------------------------
+
+def test_mesh_without_armature_is_a_clear_error(addon, tmp_path):
+    bpy.ops.mesh.primitive_uv_sphere_add()
+    with pytest.raises(RuntimeError, match="no Armature modifier"):
+        bake_op(tmp_path)
+
+
+def test_armature_without_animation_is_a_clear_error(addon, tmp_path):
+    obj, rig = character(addon)
+    rig.animation_data.action = None
+    with pytest.raises(RuntimeError, match="no animation"):
+        bake_op(tmp_path)
+
+
+def test_inward_normals_are_detected_and_named(addon, tmp_path):
+    obj, rig = character(addon)
+    import bmesh
+    bm = bmesh.new()
+    bm.from_mesh(obj.data)
+    bmesh.ops.reverse_faces(bm, faces=bm.faces[:])
+    bm.to_mesh(obj.data)
+    bm.free()
+    with pytest.raises(RuntimeError, match="point inward"):
+        bake_op(tmp_path)
+    assert obj.penumbra_visibility.model_path == ""
+
+
+def test_topology_changing_modifier_is_a_clear_error(addon, tmp_path):
+    obj, rig = character(addon)
+    obj.modifiers.new("Subdivision", "SUBSURF")
+    with pytest.raises(RuntimeError, match="change its topology"):
+        bake_op(tmp_path)
+
+
+def test_empty_mesh_is_a_clear_error(addon, tmp_path):
+    obj, rig = character(addon)
+    obj.data = bpy.data.meshes.new("Empty")
+    with pytest.raises(RuntimeError, match="no vertices"):
+        bake_op(tmp_path)
+
+
+def test_zero_area_faces_and_zero_length_normals_bake(addon, tmp_path):
+    obj, rig = character(addon)
+    mesh = obj.data
+    start = len(mesh.vertices)
+    mesh.vertices.add(3)
+    for k in range(3):
+        mesh.vertices[start + k].co = (0.0, 0.0, 3.0)  # three corners at one point: zero area
+    mesh.loops.add(3)
+    mesh.polygons.add(1)
+    for k in range(3):
+        mesh.loops[len(mesh.loops) - 3 + k].vertex_index = start + k
+    mesh.polygons[-1].loop_start = len(mesh.loops) - 3
+    if hasattr(mesh.polygons[-1], "loop_total") and mesh.polygons[-1].loop_total != 3:
+        mesh.polygons[-1].loop_total = 3
+    mesh.update()
+    assert bake_op(tmp_path) == {"FINISHED"}
+    summary = json.loads(obj.penumbra_visibility.report)
+    assert summary["zero_area_triangles"] >= 1
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    assert np.all(np.isfinite(attribute(obj, "penumbra_visibility", 1)))
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1e4])
+def test_tiny_and_huge_scales_bake_the_same_visibility(addon, tmp_path, scale):
+    obj, rig = character(addon)
+    uniform_world(addon)
+    assert bake_op(tmp_path, filepath=os.path.join(str(tmp_path), "one.pzh")) == {"FINISHED"}
+    addon.frame_set(5)
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    reference = attribute(obj, "penumbra_visibility", 1).copy()
+    rig.scale = (scale, scale, scale)
+    assert bake_op(tmp_path, filepath=os.path.join(str(tmp_path), "scaled.pzh")) == {"FINISHED"}
+    addon.frame_set(5)
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    scaled = attribute(obj, "penumbra_visibility", 1)
+    assert np.abs(scaled - reference).mean() < 0.01
+
+
+def test_cancel_mid_bake_leaves_the_earlier_model_untouched(addon, tmp_path):
+    obj, rig = character(addon)
+    assert bake_op(tmp_path) == {"FINISHED"}
+    path = obj.penumbra_visibility.model_path
+    before = open(path, "rb").read()
+    report = obj.penumbra_visibility.report
+    calls = []
+
+    def stop_after_a_while(fraction):
+        calls.append(fraction)
+        return len(calls) < 3
+    with pytest.raises(native.module.Cancelled):
+        bake.bake_training_set(bpy.context, obj, 1, 24, 1, rays=1024, progress=stop_after_a_while)
+    assert open(path, "rb").read() == before
+    assert obj.penumbra_visibility.report == report
+    assert addon.frame_current == 1  # the frame is restored
+
+
+def test_model_from_another_mesh_or_armature_is_refused(addon, tmp_path):
+    obj, rig = character(addon)
+    assert bake_op(tmp_path) == {"FINISHED"}
+    model_path = obj.penumbra_visibility.model_path
+    other, other_rig = visibility_character.build(name="Other", detail=2, frames=4)
+    other.penumbra_visibility.model_path = model_path
+    bpy.context.view_layer.objects.active = other
+    with pytest.raises(RuntimeError, match="another mesh|vertices"):
+        bpy.ops.penumbra.apply_visibility()
+    # Same mesh, armature without the model's joints.
+    bpy.context.view_layer.objects.active = obj
+    rig.data.bones["forearm.L"].name = "renamed"
+    with pytest.raises(RuntimeError, match="another armature"):
+        bpy.ops.penumbra.apply_visibility()
+
+
+def test_truncated_model_file_is_a_clear_error_and_nothing_changes(addon, tmp_path):
+    obj, rig = character(addon)
+    assert bake_op(tmp_path) == {"FINISHED"}
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    before = attribute(obj, "penumbra_visibility", 1).copy()
+    path = obj.penumbra_visibility.model_path
+    data = open(path, "rb").read()
+    with open(path, "wb") as f:
+        f.write(data[: len(data) // 2])
+    runtime.forget()
+    with pytest.raises(RuntimeError, match="truncated"):
+        bpy.ops.penumbra.apply_visibility()
+    np.testing.assert_array_equal(attribute(obj, "penumbra_visibility", 1), before)
+    # The handler does not raise either: it records the problem on the object.
+    obj.penumbra_visibility.enabled = True
+    addon.frame_set(3)
+    assert "truncated" in obj.penumbra_visibility.status
+
+
+def test_pose_edits_reshade_through_the_depsgraph_handler(addon, tmp_path):
+    obj, rig = character(addon)
+    uniform_world(addon)
+    assert bake_op(tmp_path) == {"FINISHED"}
+    obj.penumbra_visibility.enabled = True
+    addon.frame_set(1)
+    before = attribute(obj, "penumbra_visibility", 1).copy()
+    # Edit the pose by hand (no keyframe, no frame change): arms down.
+    rig.animation_data.action = None
+    for side in ("L", "R"):
+        rig.pose.bones[f"upper_arm.{side}"].rotation_euler = (-1.2, 0.0, 0.0)
+    bpy.context.view_layer.update()
+    after = attribute(obj, "penumbra_visibility", 1)
+    assert np.abs(after - before).max() > 0.05
+    # The handler's own attribute writes do not make it loop: one more update changes nothing.
+    bpy.context.view_layer.update()
+    np.testing.assert_array_equal(attribute(obj, "penumbra_visibility", 1), after)
+
+
+def test_several_actions_are_baked_in_turn_and_the_action_is_restored(addon, tmp_path):
+    obj, rig = character(addon)
+    walk = rig.animation_data.action
+    raise_action = bpy.data.actions.new("Raise")
+    rig.animation_data.action = raise_action
+    for frame in range(1, 25):
+        for side in ("L", "R"):
+            bone = rig.pose.bones[f"upper_arm.{side}"]
+            bone.rotation_euler = (math.radians(3.0 * frame), 0.0, 0.0)
+            bone.keyframe_insert("rotation_euler", frame=frame)
+    rig.animation_data.action = walk
+    assert bake_op(tmp_path, frame_step=4, actions=f"{walk.name}, Raise") == {"FINISHED"}
+    summary = json.loads(obj.penumbra_visibility.report)
+    assert summary["frames"] == 12  # 6 frames of each action
+    assert rig.animation_data.action == walk
+    with pytest.raises(RuntimeError, match="no action named"):
+        bake_op(tmp_path, actions="Missing")

@@ -1,0 +1,279 @@
+// Ray casting and per-frame visibility, checked against a brute-force ray
+// tracer written here (Möller–Trumbore over every triangle, no Embree) and
+// against closed forms (a lone convex sphere sees exactly its upper hemisphere).
+#include <cmath>
+#include <numbers>
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <gtest/gtest.h>
+
+#include "common/error.hpp"
+#include "sh/basis.hpp"
+#include "sh/point_sets.hpp"
+#include "sh/zonal.hpp"
+#include "visibility/mesh_frames.hpp"
+#include "visibility/pose_model.hpp"
+#include "visibility/visibility_bake.hpp"
+#include "visibility_test_util.hpp"
+
+namespace penumbra::visibility {
+namespace {
+
+using testing::TestMesh;
+using testing::add_sphere;
+
+bool brute_force_occluded(const TriangleMesh& mesh, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+        Eigen::Vector3d v[3];
+        for (int k = 0; k < 3; ++k) {
+            const auto i = mesh.triangles[3 * t + k];
+            v[k] = Eigen::Vector3d(mesh.positions[3 * i], mesh.positions[3 * i + 1], mesh.positions[3 * i + 2]);
+        }
+        const Eigen::Vector3d e1 = v[1] - v[0], e2 = v[2] - v[0], p = d.cross(e2);
+        const double det = e1.dot(p);
+        if (std::abs(det) < 1e-14) continue;
+        const Eigen::Vector3d s = o - v[0];
+        const double u = s.dot(p) / det;
+        if (u < 0 || u > 1) continue;
+        const Eigen::Vector3d q = s.cross(e1);
+        const double w = d.dot(q) / det;
+        if (w < 0 || u + w > 1) continue;
+        if (e2.dot(q) / det > 0) return true;
+    }
+    return false;
+}
+
+TestMesh two_spheres() {
+    TestMesh m;
+    add_sphere(m, Eigen::Vector3d::Zero(), 1.0);
+    add_sphere(m, Eigen::Vector3d(1.5, 0.2, 0.1), 0.6, 16, 8);
+    return m;
+}
+
+FrameGeometry geometry_of(const TestMesh& m) {
+    FrameGeometry g;
+    g.mesh = m.mesh;
+    g.normals = m.normals;
+    return g;
+}
+
+TEST(VisibilityBake, packets_agree_with_single_rays_and_with_brute_force) {
+    const TestMesh m = two_spheres();
+    const OcclusionScene scene({&m.mesh});
+    const sh::PointSet dirs = sh::fibonacci_sphere(64);
+    std::vector<Eigen::Vector3f> d;
+    for (const auto& x : dirs.directions) d.push_back(x.cast<float>());
+    int disagreements = 0, checked = 0;
+    for (std::size_t v = 0; v < m.mesh.vertex_count(); v += 7) {
+        const Eigen::Vector3f n(m.normals[3 * v], m.normals[3 * v + 1], m.normals[3 * v + 2]);
+        const Eigen::Vector3f o = Eigen::Vector3f(m.mesh.positions[3 * v], m.mesh.positions[3 * v + 1],
+                                                  m.mesh.positions[3 * v + 2]) + 1e-3f * n;
+        std::vector<std::uint8_t> hit(d.size());
+        scene.occluded_bundle(o, d.data(), int(d.size()), 0.0f, INFINITY, hit.data(), true);
+        for (std::size_t i = 0; i < d.size(); ++i) {
+            EXPECT_EQ(bool(hit[i]), scene.occluded1(o, d[i], 0.0f, INFINITY));
+            disagreements += bool(hit[i]) != brute_force_occluded(m.mesh, o.cast<double>(), d[i].cast<double>());
+            ++checked;
+        }
+    }
+    // Grazing rays may go either way; almost all must agree.
+    EXPECT_LT(disagreements, checked / 200 + 2) << disagreements << " of " << checked;
+}
+
+TEST(VisibilityBake, frame_visibility_matches_a_brute_force_projection) {
+    const TestMesh m = two_spheres();
+    BakeSettings s;
+    s.rays = 64;
+    s.below_horizon = BelowHorizon::Cast;
+    const auto neighbours = reference_neighbours(m.mesh.vertex_count(), {}, m.mesh.triangles);
+    std::vector<float> vis(m.mesh.vertex_count() * 16);
+    bake_frame(geometry_of(m), neighbours, s, vis.data());
+    const RaySet rays = make_ray_set(s);
+    std::vector<float> frames(9 * m.mesh.vertex_count());
+    vertex_frames(m.mesh.positions, m.normals, m.mesh.triangles, neighbours, frames.data());
+    const double offset = 1e-4 * mesh_diagnostics(m.mesh.positions, m.normals, {}).bounding_diagonal;
+    double worst = 0.0;
+    for (std::size_t v = 0; v < m.mesh.vertex_count(); v += 5) {
+        const float* f = frames.data() + 9 * v;
+        const Eigen::Vector3d t(f[0], f[1], f[2]), b(f[3], f[4], f[5]), n(f[6], f[7], f[8]);
+        const Eigen::Vector3d p(m.mesh.positions[3 * v], m.mesh.positions[3 * v + 1], m.mesh.positions[3 * v + 2]);
+        std::vector<double> expected(16, 0.0);
+        for (int i = 0; i < s.rays; ++i) {
+            const Eigen::Vector3d dl = rays.directions[i].cast<double>();
+            const Eigen::Vector3d dw = dl.x() * t + dl.y() * b + dl.z() * n;
+            const Eigen::Vector3d o = p + (i < rays.upper ? offset : -offset) * n;
+            if (brute_force_occluded(m.mesh, o, dw)) continue;
+            for (int k = 0; k < 16; ++k) expected[k] += rays.projection[i * 16 + k];
+        }
+        for (int k = 0; k < 16; ++k) worst = std::max(worst, std::abs(expected[k] - vis[v * 16 + k]));
+    }
+    // One grazing ray flipping changes a coefficient by at most 4π/64·|y| < 0.1.
+    EXPECT_LT(worst, 0.1);
+}
+
+TEST(VisibilityBake, lone_sphere_sees_exactly_its_upper_hemisphere) {
+    TestMesh m;
+    add_sphere(m, Eigen::Vector3d::Zero(), 1.0, 32, 16);
+    BakeSettings s;
+    s.rays = 4096;
+    const auto neighbours = reference_neighbours(m.mesh.vertex_count(), {}, m.mesh.triangles);
+    std::vector<float> vis(m.mesh.vertex_count() * 16);
+    bake_frame(geometry_of(m), neighbours, s, vis.data());
+    // Closed form: the indicator of cosθ > 0 about +z, projected by Gauss–Legendre.
+    const auto band = sh::project_zonal(4, [](double mu) { return mu > 0 ? 1.0 : 0.0; }, 256);
+    for (std::size_t v = 0; v < m.mesh.vertex_count(); v += 13) {
+        for (int l = 0; l < 4; ++l)
+            for (int mm = -l; mm <= l; ++mm) {
+                const double expected = mm == 0 ? band[l] : 0.0;
+                EXPECT_NEAR(vis[v * 16 + sh::sh_index(l, mm)], expected, 0.03) << "vertex " << v << " l " << l;
+            }
+        double sh[16];
+        for (int k = 0; k < 16; ++k) sh[k] = vis[v * 16 + k];
+        EXPECT_NEAR(ambient_occlusion(4, sh), 1.0, 0.01);
+    }
+}
+
+TEST(VisibilityBake, results_do_not_depend_on_scale_from_1e_minus_3_to_1e4) {
+    const TestMesh base = two_spheres();
+    BakeSettings s;
+    s.rays = 64;
+    const auto neighbours = reference_neighbours(base.mesh.vertex_count(), {}, base.mesh.triangles);
+    std::vector<float> reference(base.mesh.vertex_count() * 16);
+    bake_frame(geometry_of(base), neighbours, s, reference.data());
+    for (double scale : {1e-3, 1e4}) {
+        TestMesh m = base;
+        for (auto& x : m.mesh.positions) x = float(x * scale);
+        for (std::size_t i = 0; i < m.mesh.positions.size(); i += 3) m.mesh.positions[i] += float(7.0 * scale);
+        std::vector<float> vis(reference.size());
+        bake_frame(geometry_of(m), neighbours, s, vis.data());
+        std::size_t differing = 0;
+        for (std::size_t v = 0; v < m.mesh.vertex_count(); ++v) {
+            double d = 0;
+            for (int k = 0; k < 16; ++k) d += std::abs(vis[v * 16 + k] - reference[v * 16 + k]);
+            differing += d > 1e-4;
+        }
+        EXPECT_LT(differing, m.mesh.vertex_count() / 50) << "scale " << scale;
+    }
+}
+
+TEST(VisibilityBake, occluders_shadow_the_mesh) {
+    TestMesh m;
+    add_sphere(m, Eigen::Vector3d::Zero(), 1.0);
+    TestMesh blocker;
+    add_sphere(blocker, Eigen::Vector3d(0, 0, 1.6), 0.5);
+    BakeSettings s;
+    s.rays = 256;
+    const auto neighbours = reference_neighbours(m.mesh.vertex_count(), {}, m.mesh.triangles);
+    FrameGeometry g = geometry_of(m);
+    std::vector<float> open(m.mesh.vertex_count() * 16), shadowed(open.size());
+    bake_frame(g, neighbours, s, open.data());
+    g.occluders.push_back(blocker.mesh);
+    bake_frame(g, neighbours, s, shadowed.data());
+    double top_open[16], top_shadowed[16];
+    for (int k = 0; k < 16; ++k) top_open[k] = open[k], top_shadowed[k] = shadowed[k];  // vertex 0: the pole
+    EXPECT_NEAR(ambient_occlusion(4, top_open), 1.0, 0.02);
+    EXPECT_LT(ambient_occlusion(4, top_shadowed), 0.7);
+}
+
+TEST(VisibilityBake, inward_normals_are_detected) {
+    TestMesh m;
+    add_sphere(m, Eigen::Vector3d::Zero(), 1.0);
+    EXPECT_FALSE(mesh_diagnostics(m.mesh.positions, m.normals, m.mesh.triangles).normals_point_inward);
+    for (std::size_t t = 0; t < m.mesh.triangles.size(); t += 3) std::swap(m.mesh.triangles[t + 1], m.mesh.triangles[t + 2]);
+    for (auto& n : m.normals) n = -n;
+    const auto d = mesh_diagnostics(m.mesh.positions, m.normals, m.mesh.triangles);
+    EXPECT_TRUE(d.normals_point_inward);
+    EXPECT_LT(d.signed_volume, 0.0);
+}
+
+TEST(VisibilityBake, zero_area_faces_and_zero_normals_give_finite_visibility) {
+    TestMesh m;
+    add_sphere(m, Eigen::Vector3d::Zero(), 1.0);
+    // A degenerate triangle (all three corners at one new vertex) and zeroed normals.
+    const auto extra = std::uint32_t(m.mesh.vertex_count());
+    for (int k = 0; k < 3; ++k) m.mesh.positions.push_back(0.5f), m.normals.push_back(0.0f);
+    m.mesh.triangles.insert(m.mesh.triangles.end(), {extra, extra, extra});
+    m.normals[3] = m.normals[4] = m.normals[5] = 0.0f;
+    m.normals[6] = NAN;
+    const auto d = mesh_diagnostics(m.mesh.positions, m.normals, m.mesh.triangles);
+    EXPECT_EQ(d.zero_area_triangles, 1u);
+    EXPECT_EQ(d.zero_length_normals, 3u);
+    const auto neighbours = reference_neighbours(m.mesh.vertex_count(), {}, m.mesh.triangles);
+    BakeSettings s;
+    s.rays = 64;
+    std::vector<float> vis(m.mesh.vertex_count() * 16);
+    FrameBakeStats stats;
+    bake_frame(geometry_of(m), neighbours, s, vis.data(), {}, &stats);
+    EXPECT_EQ(stats.frames.repaired_normals, 3u);
+    for (float x : vis) EXPECT_TRUE(std::isfinite(x));
+}
+
+TEST(VisibilityBake, empty_mesh_bakes_nothing_and_bad_indices_are_errors) {
+    FrameGeometry g;
+    std::vector<float> none;
+    EXPECT_NO_THROW(bake_frame(g, {}, BakeSettings{}, none.data()));
+    TestMesh m;
+    add_sphere(m, Eigen::Vector3d::Zero(), 1.0);
+    m.mesh.triangles.push_back(999999);
+    m.mesh.triangles.push_back(0);
+    m.mesh.triangles.push_back(1);
+    EXPECT_THROW(reference_neighbours(m.mesh.vertex_count(), {}, m.mesh.triangles), ArgumentError);
+    EXPECT_THROW(OcclusionScene({&m.mesh}), ArgumentError);
+}
+
+TEST(VisibilityBake, settings_out_of_range_are_argument_errors) {
+    BakeSettings s;
+    s.rays = 2;
+    EXPECT_THROW(check_bake_settings(s), ArgumentError);
+    s = {};
+    s.order = 9;
+    EXPECT_THROW(check_bake_settings(s), ArgumentError);
+    s = {};
+    s.offset_scale = 0.0;
+    EXPECT_THROW(check_bake_settings(s), ArgumentError);
+}
+
+TEST(VisibilityBake, cancel_from_progress_throws_cancelled) {
+    TestMesh m;
+    add_sphere(m, Eigen::Vector3d::Zero(), 1.0, 64, 32);
+    const auto neighbours = reference_neighbours(m.mesh.vertex_count(), {}, m.mesh.triangles);
+    BakeSettings s;
+    s.rays = 1024;
+    std::vector<float> vis(m.mesh.vertex_count() * 16);
+    const Progress stop([](double) { return false; });
+    EXPECT_THROW(bake_frame(geometry_of(m), neighbours, s, vis.data(), stop), Cancelled);
+}
+
+TEST(VisibilityFrames, tangent_follows_the_reference_edge_and_frames_are_orthonormal) {
+    TestMesh m;
+    add_sphere(m, Eigen::Vector3d::Zero(), 1.0);
+    const auto neighbours = reference_neighbours(m.mesh.vertex_count(), {}, m.mesh.triangles);
+    std::vector<float> frames(9 * m.mesh.vertex_count());
+    vertex_frames(m.mesh.positions, m.normals, m.mesh.triangles, neighbours, frames.data());
+    for (std::size_t v = 0; v < m.mesh.vertex_count(); ++v) {
+        Eigen::Matrix3d f;
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) f(i, j) = frames[9 * v + 3 * i + j];
+        EXPECT_LT((f * f.transpose() - Eigen::Matrix3d::Identity()).norm(), 1e-5);
+        EXPECT_NEAR(f.determinant(), 1.0, 1e-5);
+        const Eigen::Vector3d edge(m.mesh.positions[3 * neighbours[v]] - m.mesh.positions[3 * v],
+                                   m.mesh.positions[3 * neighbours[v] + 1] - m.mesh.positions[3 * v + 1],
+                                   m.mesh.positions[3 * neighbours[v] + 2] - m.mesh.positions[3 * v + 2]);
+        EXPECT_GT(f.row(0).dot(edge), 0.0);
+        EXPECT_NEAR(f.row(1).dot(edge), 0.0, 1e-5);
+    }
+}
+
+TEST(VisibilityFrames, neighbours_come_from_polygons_not_their_triangulation) {
+    // One quad 0-1-2-3: vertex 0's neighbour is 1 whichever diagonal splits it.
+    const auto n = reference_neighbours(4, {4}, {0, 1, 2, 3});
+    EXPECT_EQ(n[0], 1u);
+    EXPECT_EQ(n[3], 0u);
+    EXPECT_THROW(reference_neighbours(4, {3}, {0, 1, 2, 3}), ArgumentError);
+    EXPECT_NE(topology_hash(4, {4}, {0, 1, 2, 3}), topology_hash(4, {4}, {0, 1, 3, 2}));
+    EXPECT_EQ(topology_hash(4, {4}, {0, 1, 2, 3}), topology_hash(4, {4}, {0, 1, 2, 3}));
+}
+
+}  // namespace
+}  // namespace penumbra::visibility

@@ -1,0 +1,140 @@
+"""The visibility baker through _penumbra: shapes and errors at the Python
+boundary, files, progress/cancel, and a bake of two spheres checked against a
+closed form (a lone convex sphere sees exactly its upper hemisphere)."""
+
+import numpy as np
+import pytest
+
+import _penumbra as p
+
+
+def uv_sphere(n_u=24, n_v=12, radius=1.0, centre=(0.0, 0.0, 0.0)):
+    verts = [(0.0, 0.0, 1.0)]
+    for i in range(1, n_v):
+        th = np.pi * i / n_v
+        for j in range(n_u):
+            ph = 2 * np.pi * j / n_u
+            verts.append((np.sin(th) * np.cos(ph), np.sin(th) * np.sin(ph), np.cos(th)))
+    verts.append((0.0, 0.0, -1.0))
+    normals = np.array(verts)
+    positions = normals * radius + np.array(centre)
+    tris = [(0, 1 + j, 1 + (j + 1) % n_u) for j in range(n_u)]
+    for i in range(n_v - 2):
+        for j in range(n_u):
+            a, b = 1 + i * n_u + j, 1 + i * n_u + (j + 1) % n_u
+            c, d = 1 + (i + 1) * n_u + (j + 1) % n_u, 1 + (i + 1) * n_u + j
+            tris += [(a, d, c), (a, c, b)]
+    last, ring = len(verts) - 1, 1 + (n_v - 2) * n_u
+    tris += [(last, ring + (j + 1) % n_u, ring + j) for j in range(n_u)]
+    return positions.astype(np.float32), normals.astype(np.float32), np.array(tris, dtype=np.int64)
+
+
+def rot_z(angle):
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]], dtype=np.float32)
+
+
+def two_sphere_character():
+    body = uv_sphere()
+    arm = uv_sphere(12, 8, 0.5, (1.6, 0.0, 0.0))
+    n_body = len(body[0])
+    positions = np.vstack([body[0], arm[0]])
+    normals = np.vstack([body[1], arm[1]])
+    tris = np.vstack([body[2], arm[2] + n_body])
+    return positions, normals, tris, n_body
+
+
+def bake(angles, rays=64):
+    positions, normals, tris, n_body = two_sphere_character()
+    neighbours = p.visibility_reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
+    topology = p.visibility_topology_hash(len(positions), np.full(len(tris), 3), tris.ravel())
+    ts = p.VisibilityTrainingSet(len(positions), topology, ["root", "arm"], order=4, rays=rays)
+    for i, angle in enumerate(angles):
+        r = rot_z(angle)
+        posed, posed_normals = positions.copy(), normals.copy()
+        posed[n_body:] = positions[n_body:] @ r.T
+        posed_normals[n_body:] = normals[n_body:] @ r.T
+        ts.bake_frame(i, posed, posed_normals, tris, neighbours, np.stack([np.eye(3, dtype=np.float32), r]))
+    return ts
+
+
+def test_far_side_of_the_body_sees_its_whole_upper_hemisphere():
+    ts = bake([0.0])
+    ao = p.visibility_ambient_occlusion(ts.visibility(0).astype(np.float64))
+    positions, _, _, n_body = two_sphere_character()
+    far = np.where(positions[:n_body, 0] < -0.9)[0]
+    near = np.where((positions[:n_body, 0] > 0.95))[0]
+    np.testing.assert_allclose(ao[far], 1.0, atol=0.02)
+    assert ao[near].mean() < 0.9  # the arm shadows the side facing it
+
+
+def test_fit_save_load_and_synthesize_round_trip(tmp_path):
+    ts = bake(np.linspace(0.0, np.pi / 2, 12))
+    model, report = p.fit_visibility_model(ts, [(True, True), (True, False)], lobes=2)
+    assert [j["active"] for j in report["joints"]] == [False, True]
+    assert report["holdout_frames"] == 3
+    path = str(tmp_path / "m.pzh")
+    model.save(path)
+    loaded = p.VisibilityPoseModel.load(path)
+    assert loaded.joints == ["arm"] and loaded.vertex_count == ts.vertex_count
+    axes, bands, params = loaded.synthesize(np.stack([rot_z(0.3)]))
+    assert axes.shape == (ts.vertex_count, 2, 3) and bands.shape == (ts.vertex_count, 2, 4)
+    np.testing.assert_allclose(np.linalg.norm(axes, axis=2), 1.0, atol=1e-5)
+    sh = p.zh_params_to_sh(params.astype(np.float64))
+    assert sh.shape == (ts.vertex_count, 16)
+    unseen = bake([0.05, 0.7, 1.2])
+    errors = loaded.evaluate(unseen)
+    assert errors["samples"] == 3 * ts.vertex_count
+    assert errors["ao_mean_abs"] < 0.05
+
+
+def test_training_set_pieces_save_load_and_merge(tmp_path):
+    a, b = bake([0.0, 0.2]), bake([0.4])
+    a.save(str(tmp_path / "a.pvis"))
+    b.save(str(tmp_path / "b.pvis"))
+    merged = p.VisibilityTrainingSet.merge([p.VisibilityTrainingSet.load(str(tmp_path / "b.pvis")),
+                                            p.VisibilityTrainingSet.load(str(tmp_path / "a.pvis"))])
+    # Frame 0 is in both pieces: kept once, from the first piece given (b).
+    assert merged.frame_numbers == [0.0, 1.0]
+    np.testing.assert_array_equal(merged.visibility(0), b.visibility(0))
+    np.testing.assert_array_equal(merged.visibility(1), a.visibility(1))
+
+
+def test_bad_files_are_os_errors(tmp_path):
+    with pytest.raises(OSError, match="no such file"):
+        p.VisibilityPoseModel.load(str(tmp_path / "missing.pzh"))
+    (tmp_path / "junk.pzh").write_bytes(b"x" * 100)
+    with pytest.raises(p.IoError, match="magic"):
+        p.VisibilityPoseModel.load(str(tmp_path / "junk.pzh"))
+    ts = bake([0.0])
+    ts.save(str(tmp_path / "s.pvis"))
+    with pytest.raises(OSError, match="other kind"):
+        p.VisibilityPoseModel.load(str(tmp_path / "s.pvis"))
+
+
+def test_bad_shapes_are_value_errors():
+    positions, normals, tris, _ = two_sphere_character()
+    ts = p.VisibilityTrainingSet(len(positions), 0, ["a"], rays=16)
+    nb = p.visibility_reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
+    with pytest.raises(ValueError, match="positions"):
+        ts.bake_frame(0, positions[:, :2], normals, tris, nb, np.eye(3, dtype=np.float32)[None])
+    with pytest.raises(ValueError, match="expected 1 rotations"):
+        ts.bake_frame(0, positions, normals, tris, nb, np.stack([np.eye(3)] * 2))
+    with pytest.raises(ValueError, match="vertices"):
+        ts.bake_frame(0, positions[:10], normals[:10], tris[:2], nb[:10], np.eye(3)[None])
+    with pytest.raises(ValueError, match="below_horizon"):
+        p.VisibilityTrainingSet(3, 0, [], below_horizon="sometimes")
+    with pytest.raises(ValueError, match="rays"):
+        p.VisibilityTrainingSet(3, 0, [], rays=1)
+
+
+def test_progress_false_cancels_and_keeps_the_set_unchanged():
+    positions, normals, tris, _ = two_sphere_character()
+    nb = p.visibility_reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
+    ts = p.VisibilityTrainingSet(len(positions), 0, ["a"], rays=65536)
+    with pytest.raises(p.Cancelled):
+        ts.bake_frame(0, positions, normals, tris, nb, np.eye(3)[None], progress=lambda f: False)
+    assert len(ts) == 0
+    with pytest.raises(ZeroDivisionError):
+        ts.bake_frame(0, positions, normals, tris, nb, np.eye(3)[None], progress=lambda f: 1 / 0)
+    assert len(ts) == 0
