@@ -14,6 +14,7 @@
 #include "lights/clustering.hpp"
 #include "lights/environment.hpp"
 #include "lights/lights.hpp"
+#include "lights/map_reader.hpp"
 #include "lights/rig.hpp"
 #include "lights/temporal.hpp"
 #include "numpy_image.hpp"
@@ -112,8 +113,9 @@ EnvironmentMap map_from_array(const py::array& pixels, const MapOptions& o) {
 
 class SourceHandle {
 public:
-    explicit SourceHandle(std::unique_ptr<FrameSource> s) : source(std::move(s)) {}
-    std::unique_ptr<FrameSource> source;
+    explicit SourceHandle(std::unique_ptr<LightSource> s) : light(std::move(s)), source(&light->frames()) {}
+    std::unique_ptr<LightSource> light;
+    const FrameSource* source;
 };
 
 class PyRigBuilder {
@@ -147,10 +149,10 @@ void bind_lights(py::module_& m) {
         else if (kind == "sequence") k = FrameSourceKind::sequence;
         else if (kind == "video") k = FrameSourceKind::video;
         else if (kind != "auto") throw ArgumentError("kind must be 'auto', 'image', 'sequence' or 'video'");
-        std::unique_ptr<FrameSource> s;
+        std::unique_ptr<LightSource> s;
         {
             py::gil_scoped_release release;
-            s = open_frames(path, k);
+            s = std::make_unique<LightSource>(path, k);
         }
         return std::make_shared<SourceHandle>(std::move(s));
     }, py::arg("path"), py::arg("kind") = "auto",
@@ -200,12 +202,11 @@ void bind_lights(py::module_& m) {
                                   const std::string& colorspace) {
             const ColorConfig* c = config.is_none() ? nullptr : config.cast<const ColorConfig*>();
             py::gil_scoped_release release;
-            Image image = s.source->read(index);
-            if (c) c->to_scene_linear(image, colorspace);
-            b.builder.add_frame(image);
+            b.builder.add_map(s.light->read_map(index, c, colorspace, b.builder.options().map));
         }, py::arg("source"), py::arg("index"), py::arg("config") = py::none(), py::arg("colorspace") = "",
         "Reads frame `index` of `source`, converts it from `colorspace` to scene-linear with `config` "
-        "(no conversion when config is None) and adds it.")
+        "(no conversion when config is None) and adds it. Image files wider than max_width stream: they are "
+        "read band by band and reduced as they arrive, so memory stays bounded (a 16k map never sits whole).")
         .def_property_readonly("frame_count", [](const PyRigBuilder& b) { return b.builder.frame_count(); })
         .def("finish", [](const PyRigBuilder& b, double source_fps) {
             LightRig rig;
@@ -264,6 +265,35 @@ void bind_lights(py::module_& m) {
             return image_to_array(std::move(image));
         }, py::arg("directions"), py::arg("rgb"), py::arg("max_width") = 512,
         "The last frame's map (tone-compressed to [0, 1), scene-linear) with a green ring per light.");
+
+    m.def("light_rig_read_map", [](const std::string& path, const std::string& mapping, int max_width,
+                                   py::object config, const std::string& colorspace, std::size_t band_bytes,
+                                   int threads) {
+        const ColorConfig* c = config.is_none() ? nullptr : config.cast<const ColorConfig*>();
+        const MapOptions o = map_options(mapping, {}, max_width, threads);
+        EnvironmentMap map;
+        ReadReport report;
+        {
+            py::gil_scoped_release release;
+            map = read_environment(path, c, colorspace, o, {}, band_bytes, &report);
+        }
+        Image image(map.width, map.height, 3);
+        image.pixels = std::move(map.rgb);
+        py::dict out;
+        out["pixels"] = image_to_array(std::move(image));
+        out["full_sphere"] = map.full_sphere;
+        out["defects"] = defects_dict(map.defects);
+        out["source_integral_luminance"] = map.source_integral_luminance;
+        out["streamed"] = report.streamed;
+        out["bands"] = report.bands;
+        out["buffer_bytes"] = report.buffer_bytes;
+        return out;
+    }, py::arg("path"), py::arg("mapping") = "EQUIRECTANGULAR", py::arg("max_width") = 2048,
+    py::arg("config") = py::none(), py::arg("colorspace") = "", py::arg("band_bytes") = std::size_t(16) << 20,
+    py::arg("threads") = 0,
+    "The working map of an image file (lights/map_reader.hpp): lat-long files wider than max_width are read band "
+    "by band and reduced as they arrive. Dict: pixels (h, w, 3) scene-linear, full_sphere, defects, "
+    "source_integral_luminance, streamed, bands, buffer_bytes (largest input buffers held at once).");
 
     m.def("light_rig_lights", [](const py::array& pixels, const std::string& mapping, int count,
                                  const std::string& sampler, bool blue_noise, const std::string& power,

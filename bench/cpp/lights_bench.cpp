@@ -5,6 +5,10 @@
 // N = 300, one thread and all cores. Video decoding is timed apart. The
 // paper: under 5 ms for 300 lights at 360x90 on a 3 GHz Pentium 4 (2005).
 // Usage: penumbra_lights_bench [world.exr] [out.md]
+// 16k memory check (driven by bench/bench_lights_timing.py, one process per
+// measurement so each peak RSS is its own):
+//   penumbra_lights_bench --make-16k world.exr out.exr   bilinear 16384x8192 half EXR, written by scanlines
+//   penumbra_lights_bench --read-16k file.exr stream|whole   64-light rig; prints "ms_read ms_total peak_rss_mb"
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -14,11 +18,17 @@
 #include <string>
 #include <thread>
 
+#include <sys/resource.h>
+
+#include <OpenImageIO/imageio.h>
+
 #include "image/frame_source.hpp"
 #include "image/image_io.hpp"
 #include "lights/clustering.hpp"
 #include "lights/lights.hpp"
+#include "lights/map_reader.hpp"
 #include "lights/parallel.hpp"
+#include "lights/rig.hpp"
 #include "lights/temporal.hpp"
 
 using namespace penumbra;
@@ -55,9 +65,71 @@ Image resize(const Image& in, int w, int h, bool upper_half) {
     return out;
 }
 
+double peak_rss_mb() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_maxrss / 1024.0;  // Linux: kilobytes
+}
+
+// A 16384x8192 half-float EXR upsampled (bilinear) from `world`, written one
+// scanline at a time so the writer itself never holds the image.
+int make_16k(const std::string& world, const std::string& out_path) {
+    namespace OIIO = OIIO_NAMESPACE;
+    const Image in = read_image(world);
+    const int w = 16384, h = 8192;
+    OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::HALF);
+    spec.attribute("compression", "zip");
+    auto out = OIIO::ImageOutput::create(out_path);
+    if (!out || !out->open(out_path, spec)) {
+        std::fprintf(stderr, "cannot write %s\n", out_path.c_str());
+        return 1;
+    }
+    std::vector<float> row(std::size_t(w) * 3);
+    for (int y = 0; y < h; ++y) {
+        const double fy = std::clamp((y + 0.5) * in.height / h - 0.5, 0.0, double(in.height - 1));
+        const int y0 = int(fy), y1 = std::min(y0 + 1, in.height - 1);
+        const double ay = fy - y0;
+        for (int x = 0; x < w; ++x) {
+            const double fx = (x + 0.5) * in.width / w - 0.5;
+            const int x0 = (int(std::floor(fx)) + in.width) % in.width, x1 = (x0 + 1) % in.width;
+            const double ax = fx - std::floor(fx);
+            for (int c = 0; c < 3; ++c)
+                row[std::size_t(x) * 3 + c] = float((1 - ay) * ((1 - ax) * in.at(x0, y0, c) + ax * in.at(x1, y0, c)) +
+                                                    ay * ((1 - ax) * in.at(x0, y1, c) + ax * in.at(x1, y1, c)));
+        }
+        if (!out->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, row.data())) return 1;
+    }
+    out->close();
+    return 0;
+}
+
+// The add-on's path for one 16k frame: working map (streamed, or the whole
+// file read first), then a 64-light rig with region powers.
+int read_16k(const std::string& path, const std::string& mode) {
+    RigOptions o;
+    o.lights.count = 64;
+    const auto t0 = Clock::now();
+    EnvironmentMap map;
+    if (mode == "stream") {
+        const LightSource source(path);
+        map = source.read_map(0, nullptr, "", o.map);
+    } else {
+        map = make_environment(read_image(path), o.map);
+    }
+    const double read_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    RigBuilder builder(o);
+    builder.add_map(std::move(map));
+    const LightRig rig = builder.finish();
+    const double total_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    std::printf("%.1f %.1f %.1f %d\n", read_ms, total_ms, peak_rss_mb(), rig.frames.at(0).active);
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+    if (argc == 4 && std::string(argv[1]) == "--make-16k") return make_16k(argv[2], argv[3]);
+    if (argc == 4 && std::string(argv[1]) == "--read-16k") return read_16k(argv[2], argv[3]);
     const std::string world = argc > 1 ? argv[1] : "/usr/share/blender/datafiles/studiolights/world/forest.exr";
     const std::string out_path = argc > 2 ? argv[2] : "docs/lights-timing.md";
     const Image source = read_image(world);

@@ -42,13 +42,13 @@ void bilinear(const Image& image, double x, double y, double out[3]) {
                  ay * ((1 - ax) * image.at(x0, y1, c) + ax * image.at(x1, y1, c));
 }
 
-// Energy-exact reduction of a latitude–longitude grid: separable overlap
-// weights, solid angle in θ (cos differences) and length in φ.
-void reduce_latlong(const Image& in, double theta_max, EnvironmentMap& out, int threads, const Progress& progress) {
-    const int W = in.width, H = in.height, w = out.width, h = out.height;
+}  // namespace
+
+LatLongSpans::LatLongSpans(int in_width, int in_height, int out_width, int out_height, double theta_max) {
+    const int W = in_width, H = in_height, w = out_width, h = out_height;
     // Column overlaps: output column C covers input x ∈ [C·W/w, (C+1)·W/w).
-    struct Span { int first; std::vector<double> weight; };
-    std::vector<Span> columns(w), rows(h);
+    columns.resize(w);
+    rows.resize(h);
     for (int C = 0; C < w; ++C) {
         const double a = double(C) * W / w, b = double(C + 1) * W / w;
         columns[C].first = int(std::floor(a));
@@ -63,35 +63,47 @@ void reduce_latlong(const Image& in, double theta_max, EnvironmentMap& out, int 
             rows[R].weight.push_back(std::cos(t0) - std::cos(t1));
         }
     }
-    for (int R0 = 0; R0 < h; R0 += 64) {
-        progress.report(double(R0) / h);
-        parallel_for(std::min(64, h - R0), threads, [&](int b, int e) {
-            std::vector<double> row_sum(std::size_t(W) * 3);
-            for (int R = R0 + b; R < R0 + e; ++R) {
-                std::fill(row_sum.begin(), row_sum.end(), 0.0);
-                double wsum = 0.0;
-                for (std::size_t k = 0; k < rows[R].weight.size(); ++k) {
-                    const float* src = in.row(rows[R].first + int(k));
-                    const double wr = rows[R].weight[k];
-                    wsum += wr;
-                    for (std::size_t i = 0; i < std::size_t(W) * 3; ++i) row_sum[i] += wr * src[i];
-                }
-                for (int C = 0; C < w; ++C) {
-                    double acc[3] = {0, 0, 0}, cw = 0.0;
-                    for (std::size_t k = 0; k < columns[C].weight.size(); ++k) {
-                        const double wc = columns[C].weight[k];
-                        cw += wc;
-                        for (int ch = 0; ch < 3; ++ch) acc[ch] += wc * row_sum[(columns[C].first + k) * 3 + ch];
-                    }
-                    float* dst = out.rgb.data() + (std::size_t(R) * w + C) * 3;
-                    for (int ch = 0; ch < 3; ++ch) dst[ch] = float(acc[ch] / (cw * wsum));
-                }
-            }
-        });
-    }
 }
 
-}  // namespace
+void reduce_latlong_rows(const LatLongSpans& spans, const float* band, int band_first_row, int in_width,
+                         int row_begin, int row_end, EnvironmentMap& out, int threads) {
+    const int W = in_width, w = out.width;
+    parallel_for(row_end - row_begin, threads, [&](int b, int e) {
+        std::vector<double> row_sum(std::size_t(W) * 3);
+        for (int R = row_begin + b; R < row_begin + e; ++R) {
+            const auto& row = spans.rows[R];
+            std::fill(row_sum.begin(), row_sum.end(), 0.0);
+            double wsum = 0.0;
+            for (std::size_t k = 0; k < row.weight.size(); ++k) {
+                const float* src = band + std::size_t(row.first + int(k) - band_first_row) * W * 3;
+                const double wr = row.weight[k];
+                wsum += wr;
+                for (std::size_t i = 0; i < std::size_t(W) * 3; ++i) row_sum[i] += wr * src[i];
+            }
+            for (int C = 0; C < w; ++C) {
+                const auto& col = spans.columns[C];
+                double acc[3] = {0, 0, 0}, cw = 0.0;
+                for (std::size_t k = 0; k < col.weight.size(); ++k) {
+                    const double wc = col.weight[k];
+                    cw += wc;
+                    for (int ch = 0; ch < 3; ++ch) acc[ch] += wc * row_sum[(col.first + k) * 3 + ch];
+                }
+                float* dst = out.rgb.data() + (std::size_t(R) * w + C) * 3;
+                for (int ch = 0; ch < 3; ++ch) dst[ch] = float(acc[ch] / (cw * wsum));
+            }
+        }
+    });
+}
+
+double latlong_row_luminance(Projection projection, int in_width, int in_height, int row, const float* rgb) {
+    const auto& Y = rec709_luminance;
+    const double omega = pixel_solid_angle(projection, {}, in_width, in_height, 0, row);
+    double row_sum = 0.0;
+    if (omega == 0.0) return 0.0;
+    for (int c = 0; c < in_width; ++c)
+        row_sum += omega * (Y[0] * rgb[3 * c] + Y[1] * rgb[3 * c + 1] + Y[2] * rgb[3 * c + 2]);
+    return row_sum;
+}
 
 double EnvironmentMap::theta_max() const { return full_sphere ? pi : 0.5 * pi; }
 double EnvironmentMap::theta_edge(int row) const { return theta_max() * row / height; }
@@ -127,6 +139,10 @@ EnvironmentMap make_environment(const Image& radiance, const MapOptions& options
         const bool latlong = options.projection == Projection::equirectangular ||
                              options.projection == Projection::hemisphere_polar;
         for (int r = 0; r < in.height; ++r) {
+            if (latlong) {
+                sum += latlong_row_luminance(options.projection, in.width, in.height, r, in.row(r));
+                continue;
+            }
             double row_sum = 0.0;
             const double row_omega = latlong ? pixel_solid_angle(options.projection, options.lens, in.width,
                                                                  in.height, 0, r) : 0.0;
@@ -154,7 +170,12 @@ EnvironmentMap make_environment(const Image& radiance, const MapOptions& options
         map.width = limit;
         map.height = std::max(1, int(std::lround(double(in.height) * limit / in.width)));
         map.rgb.assign(std::size_t(map.width) * map.height * 3, 0.0f);
-        reduce_latlong(in, map.theta_max(), map, options.threads, progress);
+        const LatLongSpans spans(in.width, in.height, map.width, map.height, map.theta_max());
+        for (int R0 = 0; R0 < map.height; R0 += 64) {
+            progress.report(double(R0) / map.height);
+            reduce_latlong_rows(spans, in.pixels.data(), 0, in.width, R0, std::min(map.height, R0 + 64), map,
+                                options.threads);
+        }
         return map;
     }
 

@@ -73,4 +73,26 @@ double integral_luminance(const EnvironmentMap& map, const std::array<double, 3>
 // columns: the test-video maker's rotations, exact for multiples of 2π/W.
 Image rotate_equirectangular_z(const Image& image, double angle);
 
+// Building blocks of the energy-exact lat-long reduction, shared by
+// make_environment (whole image in memory) and read_environment
+// (lights/map_reader.hpp, band by band from the file), so both give
+// bit-identical maps.
+struct LatLongSpans {
+    struct Span {
+        int first = 0;               // first input column / row covered
+        std::vector<double> weight;  // overlap length (columns) or solid-angle share (rows)
+    };
+    std::vector<Span> columns, rows;  // per output column / row
+    LatLongSpans(int in_width, int in_height, int out_width, int out_height, double theta_max);
+};
+
+// Output rows [row_begin, row_end) of `out` from the RGB input rows held in
+// `band`, whose first row is input row `band_first_row` (every input row
+// those output rows cover must be in the band).
+void reduce_latlong_rows(const LatLongSpans& spans, const float* band, int band_first_row, int in_width,
+                         int row_begin, int row_end, EnvironmentMap& out, int threads);
+
+// Σ Y·Ω over one RGB input row of a lat-long image (for source_integral_luminance).
+double latlong_row_luminance(Projection projection, int in_width, int in_height, int row, const float* rgb);
+
 }  // namespace penumbra::lights

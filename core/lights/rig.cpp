@@ -27,6 +27,16 @@ void RigBuilder::add_frame(const Image& radiance, const Progress& progress) {
         throw ArgumentError("frame " + std::to_string(raw_.size()) + " is " + std::to_string(radiance.width) + "x" +
                             std::to_string(radiance.height) + " but earlier frames were a different size; every "
                             "frame of a light-rig source must have the same size");
+    add_map(std::move(map));
+}
+
+void RigBuilder::add_map(EnvironmentMap map) {
+    if (!raw_.empty() && (map.width != last_map_.width || map.height != last_map_.height ||
+                          map.full_sphere != last_map_.full_sphere))
+        throw ArgumentError("frame " + std::to_string(raw_.size()) + " gives a " + std::to_string(map.width) + "x" +
+                            std::to_string(map.height) + " working map but earlier frames gave " +
+                            std::to_string(last_map_.width) + "x" + std::to_string(last_map_.height) +
+                            "; every frame of a light-rig source must have the same size");
     const PixelDefects defects = map.defects;
     FrameLights lights;
     double error = -1.0;
@@ -123,6 +133,23 @@ LightRig build_light_rig(const FrameSource& source, const ColorConfig* config, c
     }
     progress.report(1.0);
     return builder.finish(source.frames_per_second());
+}
+
+LightRig build_light_rig(const LightSource& source, const ColorConfig* config, const std::string& colorspace,
+                         const RigOptions& options, int start, int count, const Progress& progress) {
+    const FrameSource& frames = source.frames();
+    const int total = frames.frame_count();
+    if (start < 0 || start >= total)
+        throw ArgumentError("start frame " + std::to_string(start) + " is outside 0.." + std::to_string(total - 1) +
+                            " of " + frames.describe());
+    const int end = count < 0 ? total : std::min(total, start + count);
+    RigBuilder builder(options);
+    for (int i = start; i < end; ++i) {
+        progress.report(double(i - start) / std::max(1, end - start));
+        builder.add_map(source.read_map(i, config, colorspace, options.map));
+    }
+    progress.report(1.0);
+    return builder.finish(frames.frames_per_second());
 }
 
 Image preview_image(const EnvironmentMap& map, const std::vector<Light>& lights, const Eigen::Matrix3d& world_from_map,

@@ -25,6 +25,7 @@
 #include "lights/clustering.hpp"
 #include "lights/environment.hpp"
 #include "lights/lights.hpp"
+#include "lights/map_reader.hpp"
 #include "lights/temporal.hpp"
 
 namespace penumbra::lights {
@@ -66,6 +67,9 @@ public:
     // One frame of scene-linear radiance in the input projection. Validates
     // the count against the working map; ArgumentError on bad input.
     void add_frame(const Image& radiance, const Progress& progress = {});
+    // One frame already made into a working map with options().map (e.g. by
+    // LightSource::read_map, which streams large files).
+    void add_map(EnvironmentMap map);
     int frame_count() const { return int(raw_.size()); }
     const EnvironmentMap& last_map() const { return last_map_; }
     const RigOptions& options() const { return options_; }
@@ -85,6 +89,11 @@ private:
 // conversion when `config` is null), and builds the rig. Progress is
 // reported once per frame; Cancelled leaves nothing behind.
 LightRig build_light_rig(const FrameSource& source, const ColorConfig* config, const std::string& colorspace,
+                         const RigOptions& options, int start = 0, int count = -1,
+                         const Progress& progress = {});
+// The same from a LightSource: image files and sequence frames stream
+// (lights/map_reader.hpp), so a 16k map never sits in memory whole.
+LightRig build_light_rig(const LightSource& source, const ColorConfig* config, const std::string& colorspace,
                          const RigOptions& options, int start = 0, int count = -1,
                          const Progress& progress = {});
 

@@ -242,3 +242,169 @@ def test_cycles_render_lit_by_the_rig_matches_the_world(addon, tmp_path):
     expected = 0.8 * _map_irradiance(img, np.array([[0.0, 0.0, 1.0]]))[0] / math.pi
     np.testing.assert_allclose(world_lit, expected, rtol=0.04)
     np.testing.assert_allclose(rig_lit, world_lit, rtol=0.04)
+
+
+def _rig_state(scene, json_path):
+    """Everything a failed rebuild must leave as it was."""
+    from penumbra.lights.rig_objects import fcurve
+    state = {kind: sorted(b.name for b in getattr(bpy.data, kind))
+             for kind in ("collections", "objects", "lights", "actions")}
+    coll = scene.penumbra.light_rig.collection
+    state["setting"] = coll.name if coll is not None else None
+    state["linked"] = sorted(c.name for c in scene.collection.children)
+    suns = {}
+    if coll is not None:
+        for ob in coll.objects:
+            entry = {"parent": ob.parent.name if ob.parent else None, "rot": tuple(round(v, 6) for v in ob.rotation_quaternion)}
+            if ob.type == "LIGHT":
+                entry["light"] = (ob.data.name, round(ob.data.energy, 6), tuple(round(v, 6) for v in ob.data.color),
+                                  round(ob.data.angle, 6), ob.data.use_shadow)
+                keys = []
+                for block, path, index in ((ob, "rotation_quaternion", 0), (ob, "rotation_quaternion", 3),
+                                           (ob.data, "energy", 0), (ob.data, "color", 2)):
+                    fc = fcurve(block, path, index)
+                    keys.append(None if fc is None else [tuple(round(v, 6) for v in k.co) for k in fc.keyframe_points])
+                entry["keys"] = keys
+            suns[ob.name] = entry
+    state["suns"] = suns
+    state["json"] = open(json_path).read() if os.path.exists(json_path) else None
+    return state
+
+
+def _fail_after(monkeypatch, n):
+    """Makes the add-on's per-sun writer raise after `n` suns."""
+    from penumbra.lights import rig_objects
+    original = rig_objects._write_sun
+    calls = []
+
+    def failing(ob, k, values):
+        if len(calls) >= n:
+            raise RuntimeError("injected failure while writing the rig")
+        calls.append(k)
+        original(ob, k, values)
+
+    monkeypatch.setattr(rig_objects, "_write_sun", failing)
+    return calls
+
+
+def test_a_failure_half_way_leaves_the_rig_and_json_as_they_were(addon, tmp_path, monkeypatch):
+    scene = addon
+    core = _core()
+    json_path = str(tmp_path / "rig.json")
+    for name, sun in (("a", (0.4, -0.3, 0.8)), ("b", (-0.5, 0.2, 0.6))):
+        folder = tmp_path / name
+        folder.mkdir()
+        img = _sky_and_sun(h=32, w=64, sun=sun, sky=0.05)
+        for i in range(3):
+            core.write_exr(str(folder / f"sky_{i + 1:04d}.exr"),
+                           core.rotate_equirectangular_z(img, math.radians(15 * i)), half=False, colorspace="Linear")
+    # A keyframed rig of 6 suns is in the file.
+    assert bpy.ops.penumbra.build_light_rig(filepath=str(tmp_path / "a" / "sky_0001.exr"), count=6,
+                                            json_path=json_path) == {"FINISHED"}
+    before = _rig_state(scene, json_path)
+    assert len([o for o in before["suns"].values() if "light" in o]) == 6 and before["json"]
+    # A rebuild with another source and 10 suns dies after 4 suns: new suns,
+    # new keys, the JSON and the preview must all stay as they were.
+    calls = _fail_after(monkeypatch, 4)
+    with pytest.raises(RuntimeError, match="injected failure"):
+        bpy.ops.penumbra.build_light_rig(filepath=str(tmp_path / "b" / "sky_0001.exr"), count=10,
+                                         json_path=json_path)
+    assert len(calls) == 4
+    assert _rig_state(scene, json_path) == before
+    assert not os.path.exists(json_path + ".tmp")
+    # The same rebuild without the failure does change the rig (the state
+    # comparison above can see a change).
+    monkeypatch.undo()
+    assert bpy.ops.penumbra.build_light_rig(filepath=str(tmp_path / "b" / "sky_0001.exr"), count=10,
+                                            json_path=json_path) == {"FINISHED"}
+    after = _rig_state(scene, json_path)
+    assert after != before and len([o for o in after["suns"].values() if "light" in o]) == 10
+
+
+def test_a_failure_on_a_new_rig_leaves_nothing_behind(addon, tmp_path, monkeypatch):
+    scene = addon
+    path = _write_map(str(tmp_path / "map.exr"), _sky_and_sun(h=32, w=64))
+    json_path = str(tmp_path / "rig.json")
+    before = _rig_state(scene, json_path)
+    _fail_after(monkeypatch, 2)
+    with pytest.raises(RuntimeError, match="injected failure"):
+        bpy.ops.penumbra.build_light_rig(filepath=path, count=5, json_path=json_path)
+    assert _rig_state(scene, json_path) == before
+    assert scene.penumbra.light_rig.collection is None
+    assert not any(o.name.startswith("Penumbra") for o in bpy.data.objects)
+
+
+def _strongest_direction(scene):
+    suns = [o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"]
+    dirs = np.array([tuple(o.matrix_world.to_3x3() @ mathutils.Vector((0, 0, 1))) for o in suns])
+    energy = np.array([o.data.energy for o in suns])
+    return dirs, energy, dirs[int(np.argmax(energy))]
+
+
+def test_fisheye_input_gives_upper_hemisphere_lights_and_places_a_spot(addon, tmp_path):
+    # Equidistant fisheye looking up, 128 px, image top = +Y, right = -X
+    # (docs/lights.md), built here from that description, not from core code.
+    n, R = 128, 64.0
+    theta, phi = math.radians(40), math.radians(30)
+    d = np.array([math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta)])
+    rho = theta / (math.pi / 2) * R
+    col = n / 2 + rho * (-d[0]) / math.sin(theta)
+    row = n / 2 - rho * d[1] / math.sin(theta)
+    y, x = np.mgrid[0:n, 0:n] + 0.5
+    img = np.zeros((n, n, 3), np.float32)
+    img[np.hypot(x - n / 2, y - n / 2) < R] = 0.02
+    img[(np.abs(x - col) < 1.6) & (np.abs(y - row) < 1.6)] = 2000.0
+    path = _write_map(str(tmp_path / "fisheye.exr"), img)
+    assert bpy.ops.penumbra.build_light_rig(filepath=path, mapping="FISHEYE", count=24,
+                                            json_path=str(tmp_path / "f.json")) == {"FINISHED"}
+    dirs, energy, strongest = _strongest_direction(addon)
+    assert len(dirs) == 24
+    assert dirs[:, 2].min() > -1e-6, dirs[:, 2].min()  # nothing below the horizon
+    angle = math.degrees(math.acos(min(1.0, float(np.dot(strongest, d)))))
+    assert angle < 3.0, angle
+
+
+def test_mirror_ball_input_places_a_spot(addon, tmp_path):
+    # Mirror ball photographed looking along +Y: the ball's normal at image
+    # point (u, v) (right, up, unit disc) is (u, -sqrt(1 - u² - v²), v); the
+    # view ray (0, 1, 0) reflects to the direction seen there.
+    n, R = 128, 64.0
+    d = np.array([0.5, -0.6, 0.62])
+    d /= np.linalg.norm(d)
+    normal = d - np.array([0.0, 1.0, 0.0])
+    normal /= np.linalg.norm(normal)
+    col, row = n / 2 + normal[0] * R, n / 2 - normal[2] * R
+    y, x = np.mgrid[0:n, 0:n] + 0.5
+    img = np.zeros((n, n, 3), np.float32)
+    img[np.hypot(x - n / 2, y - n / 2) < R] = 0.5  # a sky bright enough to draw some lights everywhere
+    img[(np.abs(x - col) < 1.6) & (np.abs(y - row) < 1.6)] = 2000.0
+    path = _write_map(str(tmp_path / "ball.exr"), img)
+    assert bpy.ops.penumbra.build_light_rig(filepath=path, mapping="MIRROR_BALL", count=24,
+                                            json_path=str(tmp_path / "m.json")) == {"FINISHED"}
+    dirs, energy, _ = _strongest_direction(addon)
+    assert dirs[:, 2].min() < -0.2  # a full-sphere input lights from below too
+    # The uniform sky's first moment ∫ L ω dω is zero, so the suns' summed
+    # flux vector points at the spot.
+    resultant = (energy[:, None] * dirs).sum(axis=0)
+    resultant /= np.linalg.norm(resultant)
+    angle = math.degrees(math.acos(min(1.0, float(np.dot(resultant, d)))))
+    assert angle < 4.0, angle
+
+
+def test_shadow_limit_gives_shadows_to_the_eight_strongest(addon, tmp_path):
+    scene = addon
+    path = _write_map(str(tmp_path / "map.exr"), _sky_and_sun(h=32, w=64, sky=0.2))
+    json_path = str(tmp_path / "s.json")
+    assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, limit_shadows=True,
+                                            json_path=json_path) == {"FINISHED"}
+    from penumbra.lights.rig_objects import INDEX_KEY
+    suns = {int(o[INDEX_KEY]): o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"}
+    # The strongest by mean luminance, from the JSON's own numbers.
+    doc = json.load(open(json_path))
+    y = np.array([0.2126, 0.7152, 0.0722])
+    power = np.mean([[np.dot(l["rgb"], y) for l in f["lights"]] for f in doc["frames"]], axis=0)
+    strongest = set(np.argsort(-power)[:8].tolist())
+    assert sorted(k for k, o in suns.items() if o.data.use_shadow) == sorted(strongest)
+    assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, limit_shadows=False,
+                                            json_path=json_path) == {"FINISHED"}
+    assert all(o.data.use_shadow for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT")

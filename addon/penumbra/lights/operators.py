@@ -124,11 +124,23 @@ class _Job:
             rig["power"] = rig["power"] * self.strength
         op = self.op
         s = self.scene.penumbra.light_rig
-        collection = rig_objects.write_rig(self.scene, s, rig, op.frame_start, op.limit_shadows)
-        json_path = self.write_json(rig)
-        # Preview of the first frame's lights on the map.
-        image = self.builder.preview(rig["directions"][0], rig["rgb"][0], 512)
-        rig_objects.store_preview(PREVIEW_NAME, image)
+        # Everything that can fail without touching the .blend comes first:
+        # the JSON (to a temporary name) and the preview picture.
+        json_path, json_tmp = self.write_json(rig)
+        try:
+            image = self.builder.preview(rig["directions"][0], rig["rgb"][0], 512)
+            write = rig_objects.write_rig(self.scene, s, rig, op.frame_start, op.limit_shadows)
+            try:
+                rig_objects.store_preview(PREVIEW_NAME, image)
+                os.replace(json_tmp, json_path)
+            except BaseException:
+                write.rollback()
+                raise
+            write.commit()
+        finally:
+            if os.path.exists(json_tmp):
+                os.remove(json_tmp)
+        collection = write.collection
         defects = {k: sum(d[k] for d in rig["defects"]) for k in ("nan", "inf", "negative")}
         bad = sum(defects.values())
         msg = (f"{rig['slots']} lights over {len(rig['defects'])} frame(s) in '{collection.name}'; JSON: {json_path}")
@@ -139,6 +151,7 @@ class _Job:
         return msg, bad
 
     def write_json(self, rig):
+        """Writes the JSON to a temporary name beside its path; returns (path, temporary)."""
         path = bpy.path.abspath(self.op.json_path or "//penumbra_light_rig.json")
         if path.startswith("//") or not bpy.data.filepath and self.op.json_path.startswith("//"):
             path = os.path.join(bpy.app.tempdir or tempfile.gettempdir(),
@@ -164,10 +177,14 @@ class _Job:
         }
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
         tmp = path + ".tmp"
-        with open(tmp, "w") as f:
-            json.dump(doc, f)
-        os.replace(tmp, path)
-        return path
+        try:
+            with open(tmp, "w") as f:
+                json.dump(doc, f)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.remove(tmp)
+            raise
+        return path, tmp
 
 
 class PENUMBRA_OT_build_light_rig(bpy.types.Operator):

@@ -20,53 +20,6 @@ COLLECTION_NAME = "Penumbra Light Rig"
 LINEAR = 1  # FCurve keyframe interpolation enum value of 'LINEAR'
 
 
-def _collection(scene, settings):
-    coll = settings.collection
-    if coll is None or coll.name not in bpy.data.collections:
-        coll = bpy.data.collections.new(COLLECTION_NAME)
-        settings.collection = coll
-    if coll.name not in scene.collection.children:
-        scene.collection.children.link(coll)
-    return coll
-
-
-def _root(coll):
-    for ob in coll.objects:
-        if ob.get(ROOT_KEY):
-            return ob
-    root = bpy.data.objects.new("Penumbra Light Rig Root", None)
-    root[ROOT_KEY] = True
-    root.empty_display_type = "SPHERE"
-    coll.objects.link(root)
-    return root
-
-
-def _suns(coll, root, slots):
-    existing = {}
-    for ob in list(coll.objects):
-        if INDEX_KEY in ob:
-            k = int(ob[INDEX_KEY])
-            if k >= slots or k in existing or ob.type != "LIGHT":
-                data = ob.data
-                bpy.data.objects.remove(ob, do_unlink=True)
-                if data is not None and data.users == 0:
-                    bpy.data.lights.remove(data)
-            else:
-                existing[k] = ob
-    suns = []
-    for k in range(slots):
-        ob = existing.get(k)
-        if ob is None:
-            data = bpy.data.lights.new(f"Penumbra Sun {k:03d}", "SUN")
-            ob = bpy.data.objects.new(f"Penumbra Sun {k:03d}", data)
-            ob[INDEX_KEY] = k
-            coll.objects.link(ob)
-        ob.parent = root
-        ob.rotation_mode = "QUATERNION"
-        suns.append(ob)
-    return suns
-
-
 def sun_quaternions(directions):
     """(F, 4) quaternions (w, x, y, z) taking +Z to each direction, with signs
     chosen so consecutive frames never flip (q and -q are the same rotation)."""
@@ -112,41 +65,191 @@ def _set_keys(id_block, path, index, frames, values):
     fc.update()
 
 
+def shadowed_indices(mean_power, limit=8):
+    """Indices of the `limit` strongest lights by mean power (ties: lower index)."""
+    order = np.argsort(-np.asarray(mean_power, dtype=float), kind="stable")
+    return set(int(k) for k in order[:limit])
+
+
+class _Values:
+    """Everything the suns get, computed and checked before the .blend is touched."""
+
+    def __init__(self, rig, frame_start, limit_shadows):
+        self.slots = int(rig["slots"])
+        rgb = np.asarray(rig["rgb"], dtype=float)              # (F, S, 3)
+        directions = np.asarray(rig["directions"], dtype=float)
+        spread = np.asarray(rig["spread"], dtype=float)
+        power = np.asarray(rig["power"], dtype=float)
+        if self.slots < 1 or rgb.ndim != 3 or rgb.shape[1:] != (self.slots, 3) or rgb.shape[0] < 1:
+            raise ValueError(f"the rig has no lights to write (rgb {rgb.shape}, {self.slots} slots)")
+        if directions.shape != rgb.shape or spread.shape != rgb.shape[:2] or power.shape != rgb.shape[:2]:
+            raise ValueError("the rig's arrays do not agree in shape")
+        for name, a in (("rgb", rgb), ("directions", directions), ("spread", spread), ("power", power)):
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"the rig's {name} has non-finite values; nothing was written")
+        self.n_frames = rgb.shape[0]
+        self.strength = rgb.max(axis=2)                        # (F, S)
+        self.colour = np.where(self.strength[..., None] > 0,
+                               rgb / np.maximum(self.strength[..., None], 1e-30), 1.0)
+        self.angle = np.clip(2.0 * math.sqrt(2.0) * spread, 0.0, math.pi)
+        strongest = shadowed_indices(power.mean(axis=0))
+        self.shadow = [(k in strongest) if limit_shadows else True for k in range(self.slots)]
+        self.quats = [sun_quaternions(directions[:, k]) for k in range(self.slots)]
+        self.frames = np.arange(self.n_frames, dtype=float) + frame_start
+
+
+def _write_sun(ob, k, v):
+    """Sets and keys sun `k` from the precomputed values `v`."""
+    light = ob.data
+    light.use_shadow = v.shadow[k]
+    quats = v.quats[k]
+    ob.animation_data_clear()
+    light.animation_data_clear()
+    ob.rotation_mode = "QUATERNION"
+    ob.rotation_quaternion = quats[0]
+    light.energy = float(v.strength[0, k])
+    light.color = v.colour[0, k]
+    light.angle = float(v.angle[0, k])
+    if v.n_frames > 1:
+        for i in range(4):
+            _set_keys(ob, "rotation_quaternion", i, v.frames, quats[:, i])
+        _set_keys(light, "energy", None, v.frames, v.strength[:, k])
+        for i in range(3):
+            _set_keys(light, "color", i, v.frames, v.colour[:, k, i])
+        _set_keys(light, "angle", None, v.frames, v.angle[:, k])
+
+
+_KINDS = ("objects", "lights", "actions", "images", "collections")  # removal order
+
+
+def _action(id_block):
+    anim = id_block.animation_data
+    return anim.action if anim is not None else None
+
+
+class _Snapshot:
+    """What write_rig may change, to put back if it fails half-way."""
+
+    def __init__(self, scene, settings):
+        self.scene = scene
+        self.settings = settings
+        self.collection = settings.collection
+        self.linked = self.collection is not None and self.collection.name in scene.collection.children
+        self.ids = {kind: set(getattr(bpy.data, kind)[:]) for kind in _KINDS}
+        self.objects = []
+        if self.collection is not None:
+            for ob in self.collection.objects:
+                entry = {"ob": ob, "parent": ob.parent, "rotation_mode": ob.rotation_mode,
+                         "rotation_quaternion": tuple(ob.rotation_quaternion),
+                         "rotation_euler": tuple(ob.rotation_euler), "action": _action(ob)}
+                if ob.type == "LIGHT" and ob.data is not None:
+                    light = ob.data
+                    entry["light"] = {"energy": light.energy, "color": tuple(light.color),
+                                      "use_shadow": light.use_shadow,
+                                      "angle": getattr(light, "angle", None), "action": _action(light)}
+                self.objects.append(entry)
+
+    @staticmethod
+    def _set_action(id_block, action):
+        if action is None:
+            id_block.animation_data_clear()
+        else:
+            id_block.animation_data_create().action = action
+
+    def restore(self):
+        """Removes what was created and puts back what was changed."""
+        for entry in self.objects:
+            ob = entry["ob"]
+            ob.parent = entry["parent"]
+            ob.rotation_mode = entry["rotation_mode"]
+            ob.rotation_quaternion = entry["rotation_quaternion"]
+            ob.rotation_euler = entry["rotation_euler"]
+            self._set_action(ob, entry["action"])
+            if "light" in entry:
+                light, saved = ob.data, entry["light"]
+                light.energy = saved["energy"]
+                light.color = saved["color"]
+                light.use_shadow = saved["use_shadow"]
+                if saved["angle"] is not None:
+                    light.angle = saved["angle"]
+                self._set_action(light, saved["action"])
+        for kind in _KINDS:
+            data = getattr(bpy.data, kind)
+            for block in [b for b in data if b not in self.ids[kind]]:
+                data.remove(block)
+        self.settings.collection = self.collection
+        if self.collection is not None:
+            children = self.scene.collection.children
+            if self.linked and self.collection.name not in children:
+                children.link(self.collection)
+            elif not self.linked and self.collection.name in children:
+                children.unlink(self.collection)
+
+
 def write_rig(scene, settings, rig, frame_start, limit_shadows):
     """Creates or updates the collection, root and suns from `rig` (the dict of
-    _penumbra.LightRigBuilder.finish) with keyframes from frame_start."""
-    coll = _collection(scene, settings)
-    root = _root(coll)
-    slots = int(rig["slots"])
-    suns = _suns(coll, root, slots)
-    rgb = np.asarray(rig["rgb"])             # (F, S, 3)
-    directions = np.asarray(rig["directions"])
-    spread = np.asarray(rig["spread"])
-    n_frames = rgb.shape[0]
-    strength = rgb.max(axis=2)                # (F, S)
-    colour = np.where(strength[..., None] > 0, rgb / np.maximum(strength[..., None], 1e-30), 1.0)
-    angle = np.clip(2.0 * math.sqrt(2.0) * spread, 0.0, math.pi)
-    mean_power = np.asarray(rig["power"]).mean(axis=0)
-    strongest = set(np.argsort(-mean_power)[:8].tolist())
-    frames = np.arange(n_frames, dtype=float) + frame_start
-    for k, ob in enumerate(suns):
-        light = ob.data
-        light.use_shadow = (k in strongest) if limit_shadows else True
-        quats = sun_quaternions(directions[:, k])
-        ob.animation_data_clear()
-        light.animation_data_clear()
-        ob.rotation_quaternion = quats[0]
-        light.energy = float(strength[0, k])
-        light.color = colour[0, k]
-        light.angle = float(angle[0, k])
-        if n_frames > 1:
-            for i in range(4):
-                _set_keys(ob, "rotation_quaternion", i, frames, quats[:, i])
-            _set_keys(light, "energy", None, frames, strength[:, k])
-            for i in range(3):
-                _set_keys(light, "color", i, frames, colour[:, k, i])
-            _set_keys(light, "angle", None, frames, angle[:, k])
-    return coll
+    _penumbra.LightRigBuilder.finish) with keyframes from frame_start.
+
+    All or nothing: the values are computed and checked first; if anything
+    fails while the .blend is being changed, what was created is removed and
+    what was changed is put back before the error propagates."""
+    values = _Values(rig, frame_start, limit_shadows)
+    snapshot = _Snapshot(scene, settings)
+    try:
+        coll = settings.collection
+        if coll is None or coll.name not in bpy.data.collections:
+            coll = bpy.data.collections.new(COLLECTION_NAME)
+            settings.collection = coll
+        if coll.name not in scene.collection.children:
+            scene.collection.children.link(coll)
+        root = next((ob for ob in coll.objects if ob.get(ROOT_KEY)), None)
+        if root is None:
+            root = bpy.data.objects.new("Penumbra Light Rig Root", None)
+            root[ROOT_KEY] = True
+            root.empty_display_type = "SPHERE"
+            coll.objects.link(root)
+        existing, extra = {}, []
+        for ob in coll.objects:
+            if INDEX_KEY in ob:
+                k = int(ob[INDEX_KEY])
+                if k >= values.slots or k in existing or ob.type != "LIGHT":
+                    extra.append(ob)
+                else:
+                    existing[k] = ob
+        for k in range(values.slots):
+            ob = existing.get(k)
+            if ob is None:
+                data = bpy.data.lights.new(f"Penumbra Sun {k:03d}", "SUN")
+                ob = bpy.data.objects.new(f"Penumbra Sun {k:03d}", data)
+                ob[INDEX_KEY] = k
+                coll.objects.link(ob)
+            ob.parent = root
+            _write_sun(ob, k, values)
+    except BaseException:
+        snapshot.restore()
+        raise
+    return RigWrite(coll, snapshot, extra)
+
+
+class RigWrite:
+    """A written rig not yet final: commit() removes the suns the new rig does
+    not use; rollback() puts the .blend back as it was before write_rig."""
+
+    def __init__(self, collection, snapshot, extra):
+        self.collection = collection
+        self._snapshot = snapshot
+        self._extra = extra
+
+    def commit(self):
+        for ob in self._extra:
+            data = ob.data
+            bpy.data.objects.remove(ob, do_unlink=True)
+            if data is not None and data.users == 0:
+                bpy.data.lights.remove(data)
+        self._extra = []
+
+    def rollback(self):
+        self._snapshot.restore()
 
 
 def store_preview(name, pixels):
