@@ -14,7 +14,15 @@ Gaussian: mean f̂ = μ + ρ(s)(f(x) − μ) (linear regression on the centre
 value) and standard deviation σ_f(s) (the residual RMS). Both are tabulated
 against log2 s for each Detail and Roughness (Scale is factored out: the
 noise is measured at Scale 1 and the footprint scaled instead; Distortion 0;
-Lacunarity 2 in 4.x). Each table entry pools N footprints of M samples."""
+Lacunarity 2 in 4.x). Each table entry pools N footprints of M samples.
+
+A second table, "octave", serves the octave-wise filter (docs/colormap.md,
+"Octave filter"): for one octave (Detail 0, Scale 1) the fraction
+q = E[within-footprint variance] / total variance over anisotropic Gaussian
+footprints of standard deviations s (minor axis) and s·e (major axis), for
+log2 e = 0 … 6. Each (D, r) entry also gets "within", the measured
+within-footprint variance of the full noise (isotropic), against which the
+octave model Σ w_i² V₀ q(2^i s) is checked."""
 
 import json
 import os
@@ -35,6 +43,7 @@ LOG2_FOOTPRINTS = np.linspace(-8.0, 4.0, 25)   # s from 1/256 to 16 noise units
 CENTRES = 600
 SAMPLES = 48
 SEED = 20240611
+LOG2_ELONGATIONS = np.arange(0.0, 7.0)          # major/minor axis ratio 1 … 64
 
 
 def noise_evaluator():
@@ -82,6 +91,29 @@ def evaluate(obj, points):
     return out.astype(np.float64)
 
 
+def measure_octave(obj, noise, centres, unit_offsets, footprints):
+    """q[e][s]: within-footprint variance of one octave (Detail 0) over a
+    Gaussian footprint with standard deviations (s·2^e, s), divided by the
+    octave's total variance (pooled over footprints of s >= 4, whose samples
+    are practically independent)."""
+    noise.inputs["Detail"].default_value = 0.0
+    count, samples = unit_offsets.shape[:2]
+    points = []
+    for log2_e in LOG2_ELONGATIONS:
+        for s in footprints:
+            p = np.repeat(centres[:, None, :], samples, axis=1).copy()
+            p[:, :, 0] += s * 2.0 ** log2_e * unit_offsets[:, :, 0]
+            p[:, :, 1] += s * unit_offsets[:, :, 1]
+            points.append(p.reshape(-1, 3))
+    values = evaluate(obj, np.concatenate(points)).reshape(len(LOG2_ELONGATIONS), len(footprints), count, samples)
+    wide = values[0, footprints >= 4.0]
+    total = float(wide.var())
+    q = values.var(axis=3, ddof=1).mean(axis=2) / total
+    print(f"octave: total variance {total:.5f}; q(s=1, e=1) {q[0, int(np.argmin(abs(np.log2(footprints))))]:.3f}",
+          flush=True)
+    return {"total_var": total, "q": q.tolist()}
+
+
 def main():
     started = time.perf_counter()
     obj, noise = noise_evaluator()
@@ -107,7 +139,7 @@ def main():
             centre = values[:CENTRES]
             mu = float(values.mean())
             total = float(centre.std())
-            rho, sigma = [], []
+            rho, sigma, within = [], [], []
             for i in range(len(footprints)):
                 f = values[CENTRES + i * CENTRES * SAMPLES: CENTRES + (i + 1) * CENTRES * SAMPLES].reshape(CENTRES, SAMPLES)
                 x = np.repeat(centre[:, None], SAMPLES, axis=1)
@@ -115,10 +147,13 @@ def main():
                 residual = f - (mu + r * (x - mu))
                 rho.append(r)
                 sigma.append(float(np.sqrt((residual ** 2).mean())))
+                within.append(float(f.var(axis=1, ddof=1).mean()))
             table[f"{detail:g}/{roughness:g}"] = {"mean": mu, "total_std": total, "rho": rho, "sigma": sigma,
+                                                 "within": within,
                                                  "min": float(values.min()), "max": float(values.max())}
             print(f"detail {detail:g} roughness {roughness:g}: mean {mu:.4f} std {total:.4f} "
                   f"sigma(s=1) {sigma[int(np.argmin(abs(LOG2_FOOTPRINTS)))]:.4f}", flush=True)
+    octave = measure_octave(obj, noise, centres, unit_offsets, footprints)
     version = f"{bpy.app.version[0]}.{bpy.app.version[1]}"
     path = os.path.join(ROOT, "addon", "penumbra", "colormap", "noise_statistics.json")
     data = json.load(open(path)) if os.path.exists(path) else {}
@@ -127,9 +162,10 @@ def main():
     data["details"] = DETAILS
     data["roughnesses"] = ROUGHNESSES
     data["footprint_filter"] = "isotropic Gaussian, standard deviation s in noise units"
+    data["log2_elongation"] = LOG2_ELONGATIONS.tolist()
     data.setdefault("blender", {})[version] = {"centres": CENTRES, "samples": SAMPLES, "seed": SEED,
                                                "seconds": round(time.perf_counter() - started, 1),
-                                               "table": table}
+                                               "table": table, "octave": octave}
     with open(path + ".tmp", "w") as f:
         json.dump(data, f, indent=1)
     os.replace(path + ".tmp", path)

@@ -3,11 +3,11 @@
 - "Penumbra Filtered Ramp" (one per lookup image): Mean, Sigma -> Color,
   Alpha. Maps (mean, σ) to the lookup's texel centres and samples it with an
   Image Texture node set to Linear / EXTEND (no wrap at the edges).
-- "Penumbra Pixel Footprint": Pixel Size -> Footprint, the side of the
-  square with the area a pixel covers on the surface (see docs/colormap.md:
-  A = p² z³ / (t |cos θ|) from Camera Data's depth z and distance t).
-- "Penumbra Noise Filter" (per noise setting): Value, Footprint, Scale ->
-  Mean, Sigma from the tabulated Noise Texture statistics.
+- "Penumbra Pixel Footprint": Pixel Size, Orthographic -> Footprint, Minor,
+  Major: the pixel's footprint on the surface from the Jacobian of the
+  camera projection (see docs/colormap.md, "Footprint").
+- "Penumbra Noise Filter" (per noise setting): Vector, Scale, Units per
+  World, Minor, Major -> Mean, Sigma, the octave-wise filter of the noise.
 - "Penumbra Height Filtered Ramp" / "Penumbra Slope Filtered Ramp": paper
   Sec. 5.1 / 5.2, reading the microsurface statistics image.
 Groups are built with interface.add_socket, so the same code makes them in
@@ -172,49 +172,130 @@ def filtered_ramp_group(image, spec, name=FILTERED_RAMP):
 
 
 def footprint_group():
-    """Footprint = p · sqrt(z³ / (t |cos θ|)): the side of a square of the
-    area one pixel covers on the surface. p is the pixel's size at unit depth
-    (2 tan(fov/2) / resolution), z the view depth, t the view distance,
-    θ the angle between view ray and normal (|cos θ| floored at 0.02, 88.9°)."""
+    """Pixel Size, Orthographic -> Footprint, Minor, Major: the pixel's
+    footprint on the surface from the Jacobian J = ∂P/∂(pixel) of the point P
+    seen through the pixel, for a locally flat surface of normal N:
+    J_u = λ p (R − (R·N)/(r·N) r) (same with U), r = the view ray scaled to a
+    unit component along the camera's forward axis F, R and U an orthonormal
+    basis of the image plane, λ p the pixel's width at the point (perspective:
+    view depth z times the pixel size at unit depth; orthographic: the
+    pixel size itself). Footprint = sqrt|J_u × J_v| (side of the square of the
+    same area), Major/Minor = the singular values of J (the footprint
+    ellipse's axes). The camera axes come from a Vector Transform
+    (Camera → World); F's sign is fixed by F·(−Incoming) > 0, so the result
+    does not depend on the renderer's camera-space convention."""
     group = bpy.data.node_groups.get(FOOTPRINT)
-    if group is not None:
+    if group is not None and "Major" in interface.socket_names(group, "OUTPUT"):
         return group
-    group, gin, gout = _new_group(FOOTPRINT, [("Pixel Size", "NodeSocketFloat", 0.001)],
-                                  [("Footprint", "NodeSocketFloat")])
+    if group is not None:
+        group.name = FOOTPRINT + " (old)"
+    group, gin, gout = _new_group(FOOTPRINT, [("Pixel Size", "NodeSocketFloat", 0.001),
+                                              ("Orthographic", "NodeSocketFloat", 0.0)],
+                                  [("Footprint", "NodeSocketFloat"), ("Minor", "NodeSocketFloat"),
+                                   ("Major", "NodeSocketFloat")])
     b = _Builder(group)
     camera = b.nodes.new("ShaderNodeCameraData")
     geometry = b.nodes.new("ShaderNodeNewGeometry")
-    cos_theta = b.math("MAXIMUM", b.math("ABSOLUTE", b.vmath("DOT_PRODUCT", geometry.outputs["Incoming"],
-                                                               geometry.outputs["Normal"])), 0.02)
-    z = camera.outputs["View Z Depth"]
-    t = camera.outputs["View Distance"]
-    area_over_p2 = b.math("DIVIDE", b.math("POWER", z, 3.0), b.math("MULTIPLY", t, cos_theta))
-    b.links.new(b.math("MULTIPLY", b.math("SQRT", area_over_p2), gin.outputs["Pixel Size"]), gout.inputs[0])
+
+    def camera_axis(axis):
+        node = b._place(b.nodes.new("ShaderNodeVectorTransform"))
+        node.vector_type = "VECTOR"
+        node.convert_from = "CAMERA"
+        node.convert_to = "WORLD"
+        node.inputs[0].default_value = axis
+        return b.vmath("NORMALIZE", node.outputs[0])
+
+    to_point = b.vscale(geometry.outputs["Incoming"], -1.0)      # unit vector camera -> point
+    f_axis = camera_axis((0.0, 0.0, 1.0))
+    forward = b.vscale(f_axis, b.math("SIGN", b.vmath("DOT_PRODUCT", f_axis, to_point)))
+    x_axis = camera_axis((1.0, 0.0, 0.0))
+    right = b.vmath("NORMALIZE", b.vmath("SUBTRACT", x_axis,
+                                         b.vscale(forward, b.vmath("DOT_PRODUCT", x_axis, forward))))
+    up = b.vmath("CROSS_PRODUCT", forward, right)
+    cos_beta = b.math("MAXIMUM", b.vmath("DOT_PRODUCT", to_point, forward), 1e-6)
+    ray = b.vscale(to_point, b.math("DIVIDE", 1.0, cos_beta))
+    normal = geometry.outputs["Normal"]
+    ray_n = b.vmath("DOT_PRODUCT", ray, normal)
+    inv_ray_n = b.math("DIVIDE", ray_n, b.math("MAXIMUM", b.math("MULTIPLY", ray_n, ray_n), 1e-12))
+    ortho = gin.outputs["Orthographic"]
+    width = b.math("MULTIPLY", gin.outputs["Pixel Size"],
+                   b.math("ADD", b.math("MULTIPLY", camera.outputs["View Z Depth"], b.math("SUBTRACT", 1.0, ortho)),
+                          ortho))
+
+    def column(axis):
+        k = b.math("MULTIPLY", b.vmath("DOT_PRODUCT", axis, normal), inv_ray_n)
+        return b.vscale(b.vmath("SUBTRACT", axis, b.vscale(ray, k)), width)
+
+    ju, jv = column(right), column(up)
+    a = b.vmath("DOT_PRODUCT", ju, ju)
+    c = b.vmath("DOT_PRODUCT", jv, jv)
+    area = b.vmath("LENGTH", b.vmath("CROSS_PRODUCT", ju, jv))
+    half_diff = b.math("MULTIPLY", b.math("SUBTRACT", a, c), 0.5)
+    ab = b.vmath("DOT_PRODUCT", ju, jv)
+    d = b.math("SQRT", b.math("MULTIPLY_ADD", half_diff, half_diff, b.math("MULTIPLY", ab, ab)))
+    major = b.math("SQRT", b.math("ADD", b.math("MULTIPLY", b.math("ADD", a, c), 0.5), d))
+    b.links.new(b.math("SQRT", area), gout.inputs["Footprint"])
+    b.links.new(major, gout.inputs["Major"])
+    b.links.new(b.math("DIVIDE", area, b.math("MAXIMUM", major, 1e-30)), gout.inputs["Minor"])
     return group
 
 
-def noise_filter_group(stats_image, stats, filter_stddev_px):
-    """Value (the noise Fac at the sample), Footprint (world), Scale (noise
-    units per world unit) -> Mean, Sigma: s = κ · Footprint · Scale (κ: the
-    pixel filter's standard deviation in pixels), then ρ(s), σ_f(s), μ from
-    the statistics image; Mean = μ + ρ (Value − μ)."""
-    name = f"{NOISE_FILTER} ({stats_image.name[len('Penumbra Noise Statistics '):]})"
+def noise_filter_group(octave_image, table, weights, lacunarity, filter_stddev_px):
+    """Vector, Scale, Units per World, Minor, Major -> Mean, Sigma, the
+    octave-wise filter of a normalized fBm Noise Texture (docs/colormap.md,
+    "Octave filter"). The noise is rebuilt from its octaves (Noise Textures at
+    Detail 0, Scale·lacunarity^i, weights w_i: exactly Blender's Fac). Over a
+    footprint of standard deviations s·(1, e) (s = κ·Minor·Scale·Units per
+    World, e = Major/Minor, κ the pixel filter's standard deviation in
+    pixels) octave i keeps the fraction q_i = q(s·lacunarity^i, e) of its
+    variance inside the footprint (measured table). Mean = 0.5 + Σ w_i g_i
+    (Fac_i − 0.5) with g_i = 1 − q_i (an octave that varies inside the pixel
+    is faded out, one that does not is kept, so the mean is nearly constant
+    across the pixel); Sigma² = V₀ Σ w_i² q_i (1 − g_i²), the variance inside
+    the footprint not already carried by the sampled mean."""
+    key = "/".join(f"{w:.6g}" for w in weights) + f" l{lacunarity:g} k{filter_stddev_px:.4g}"
+    name = f"{NOISE_FILTER} ({key})"
     group = bpy.data.node_groups.get(name)
     if group is not None:
         return group
-    group, gin, gout = _new_group(name, [("Value", "NodeSocketFloat", 0.5), ("Footprint", "NodeSocketFloat", 0.0),
-                                         ("Scale", "NodeSocketFloat", 5.0)],
+    group, gin, gout = _new_group(name, [("Vector", "NodeSocketVector", (0.0, 0.0, 0.0)),
+                                         ("Scale", "NodeSocketFloat", 5.0),
+                                         ("Units per World", "NodeSocketFloat", 1.0),
+                                         ("Minor", "NodeSocketFloat", 0.0), ("Major", "NodeSocketFloat", 0.0)],
                                   [("Mean", "NodeSocketFloat"), ("Sigma", "NodeSocketFloat")])
+    group["penumbra_octave_weights"] = list(weights)
     b = _Builder(group)
-    logs = stats["log2_footprint"]
-    s = b.math("MULTIPLY", b.math("MULTIPLY", gin.outputs["Footprint"], gin.outputs["Scale"]), filter_stddev_px)
-    log2_s = b.math("LOGARITHM", b.math("MAXIMUM", s, 1e-9), 2.0)
-    fraction = b.math("MULTIPLY_ADD", log2_s, 1.0 / (logs[-1] - logs[0]), -logs[0] / (logs[-1] - logs[0]))
-    uv = b.combine(b.texel(fraction, len(logs)), 0.5)
-    rho, sigma, mu = b.separate(b.image(stats_image, uv).outputs["Color"])
-    mean = b.math("MULTIPLY_ADD", b.math("SUBTRACT", gin.outputs["Value"], mu), rho, mu)
-    b.links.new(mean, gout.inputs["Mean"])
-    b.links.new(sigma, gout.inputs["Sigma"])
+    logs, elongations = table["log2_footprint"], table["log2_elongation"]
+    minor = b.math("MAXIMUM", gin.outputs["Minor"], 1e-12)
+    s = b.math("MULTIPLY", b.math("MULTIPLY", minor, gin.outputs["Scale"]),
+               b.math("MULTIPLY", gin.outputs["Units per World"], filter_stddev_px))
+    log2_s = b.math("LOGARITHM", b.math("MAXIMUM", s, 1e-12), 2.0)
+    log2_e = b.math("LOGARITHM", b.math("MAXIMUM", b.math("DIVIDE", gin.outputs["Major"], minor), 1.0), 2.0)
+    v = b.texel(b.math("MINIMUM", b.math("MULTIPLY", log2_e, 1.0 / elongations[-1]), 1.0), len(elongations))
+    mean = 0.5
+    variance = 0.0
+    for i, w in enumerate(weights):
+        noise = b._place(b.nodes.new("ShaderNodeTexNoise"))
+        noise.noise_dimensions = "3D"
+        if hasattr(noise, "normalize"):
+            noise.normalize = True
+        if hasattr(noise, "noise_type"):
+            noise.noise_type = "FBM"
+        noise.inputs["Detail"].default_value = 0.0
+        noise.inputs["Distortion"].default_value = 0.0
+        b.links.new(gin.outputs["Vector"], noise.inputs["Vector"])
+        b.connect(b.math("MULTIPLY", gin.outputs["Scale"], lacunarity ** i), noise.inputs["Scale"])
+        shift = i * math.log2(lacunarity)
+        u = b.texel(b.math("MULTIPLY_ADD", log2_s, 1.0 / (logs[-1] - logs[0]),
+                           (shift - logs[0]) / (logs[-1] - logs[0])), len(logs))
+        q, _, _ = b.separate(b.image(octave_image, b.combine(u, v)).outputs["Color"])
+        g = b.math("SUBTRACT", 1.0, q)
+        mean = b.math("MULTIPLY_ADD", b.math("SUBTRACT", noise.outputs["Fac"], 0.5), b.math("MULTIPLY", g, w), mean)
+        # q (1 − g²) weighted by V₀ w_i²
+        term = b.math("MULTIPLY", q, b.math("SUBTRACT", 1.0, b.math("MULTIPLY", g, g)))
+        variance = b.math("MULTIPLY_ADD", term, table["total_var"] * w * w, variance)
+    b.connect(mean, gout.inputs["Mean"])
+    b.links.new(b.math("SQRT", b.math("MAXIMUM", variance, 0.0)), gout.inputs["Sigma"])
     return group
 
 

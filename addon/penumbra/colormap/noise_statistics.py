@@ -72,14 +72,73 @@ def statistics_image(detail, roughness, folder=None):
 
 
 def pixel_filter_stddev(scene):
-    """Standard deviation, in pixels, of the render's pixel filter (one axis):
-    Cycles' Blackman-Harris over `filter_width` pixels (0.2078 px at the
-    default 1.5), Gaussian (about width/6) or box (width/√12)."""
+    """Standard deviation, in pixels, of the render's pixel filter (one axis).
+    Cycles (scene/film.cpp, filter_table) builds Blackman-Harris over twice
+    `filter_width` (so its support is ±width: σ = 0.2770·width, 0.4155 px at
+    the default 1.5), the Gaussian over 3·width (exp(−8 v²/width²):
+    σ = width/4) and the box over width (σ = width/√12)."""
     cycles = getattr(scene, "cycles", None)
     width = getattr(cycles, "filter_width", 1.5) if cycles else 1.5
     kind = getattr(cycles, "pixel_filter_type", "BLACKMAN_HARRIS") if cycles else "BLACKMAN_HARRIS"
     if kind == "BOX":
         return width / math.sqrt(12.0)
     if kind == "GAUSSIAN":
-        return width / 6.0
-    return 0.20776 * width / 1.5
+        return width / 4.0
+    return 0.27701 * width
+
+
+# ---- octave-wise filter (docs/colormap.md, "Octave filter") ---------------
+
+def octave_weights(detail, roughness):
+    """Weights w_i of Blender's normalized fBm: Fac = Σ w_i Fac_i, Fac_i the
+    Noise Texture at Detail 0 and Scale·lacunarity^i (Σ w_i = 1). Integer
+    detail n: w_i = r^i / M_n (M_n = Σ_{k<=n} r^k); fractional detail n + f
+    blends the n- and (n+1)-octave sums: w_i = r^i ((1−f)/M_n + f/M_{n+1}),
+    w_{n+1} = f r^{n+1} / M_{n+1} (Cycles' noise_fbm, Blender 3.4 and 4.x;
+    3.4 clamps roughness to [0, 1], detail to [0, 15])."""
+    detail = min(max(float(detail), 0.0), 15.0)
+    r = float(roughness)
+    if bpy.app.version < (4, 0, 0):
+        r = min(max(r, 0.0), 1.0)
+    n = int(math.floor(detail))
+    f = detail - n
+
+    def amplitude_sum(k):
+        return sum(r ** i for i in range(k + 1))
+
+    weights = [r ** i * ((1.0 - f) / amplitude_sum(n) + f / amplitude_sum(n + 1)) for i in range(n + 1)]
+    if f > 0.0:
+        weights.append(f * r ** (n + 1) / amplitude_sum(n + 1))
+    return weights
+
+
+def octave_table():
+    """dict(log2_footprint, log2_elongation, q [elongation][footprint],
+    total_var): one octave's within-footprint variance fraction, measured."""
+    d = data()
+    versions = d["blender"]
+    here = bpy.app.version[0] * 100 + bpy.app.version[1]
+    key = min(versions, key=lambda v: abs(int(v.split(".")[0]) * 100 + int(v.split(".")[1]) - here))
+    octave = versions[key]["octave"]
+    return {"log2_footprint": list(d["log2_footprint"]), "log2_elongation": list(d["log2_elongation"]),
+            "q": octave["q"], "total_var": octave["total_var"]}
+
+
+def octave_image(folder=None):
+    """The table as an image (x: log2 of the footprint's minor standard
+    deviation in octave units, y: log2 major/minor; R = q clamped to [0, 1])."""
+    from . import node_groups
+    table = octave_table()
+    q = np.clip(np.asarray(table["q"], np.float32), 0.0, 1.0)
+    pixels = np.ones(q.shape + (4,), np.float32)
+    pixels[..., 0] = q
+    pixels[..., 1] = q
+    pixels[..., 2] = q
+    # table_image takes rows bottom-up: row 0 (elongation 1) is the bottom, v = 0.
+    return node_groups.table_image("Penumbra Noise Octave Statistics", pixels, folder), table
+
+
+def filtered_sigma_max(detail, roughness):
+    """Largest σ the octave filter produces: every octave averaged out."""
+    total = octave_table()["total_var"]
+    return math.sqrt(total * sum(w * w for w in octave_weights(detail, roughness)))

@@ -45,7 +45,9 @@ def _pixel_size(scene):
     scale = scene.render.resolution_percentage / 100.0
     res_x, res_y = scene.render.resolution_x * scale, scene.render.resolution_y * scale
     if data.type == "ORTHO":
-        return data.ortho_scale / max(res_x, res_y), "orthographic camera: the footprint node assumes perspective"
+        return data.ortho_scale / max(res_x, res_y), None
+    if data.type == "PANO":
+        return 2.0 * math.tan(data.angle_x / 2.0) / res_x, "panoramic camera: the footprint assumes a pinhole"
     fit = data.sensor_fit
     if fit == "VERTICAL" or (fit == "AUTO" and res_y > res_x):
         return 2.0 * math.tan(data.angle_y / 2.0) / res_y, None
@@ -151,15 +153,18 @@ class BakePlan:
             self.warnings.append(f"{noise.noise_dimensions} noise: statistics were measured on 3D noise")
         if getattr(noise, "noise_type", "FBM") != "FBM" or not getattr(noise, "normalize", True):
             self.warnings.append("statistics were measured for normalized fBM noise")
-        if "Lacunarity" in noise.inputs and abs(noise.inputs["Lacunarity"].default_value - 2.0) > 1e-6:
-            self.warnings.append("statistics were measured with Lacunarity 2")
+        self.noise_lacunarity = noise.inputs["Lacunarity"].default_value if "Lacunarity" in noise.inputs else 2.0
+        if not self.noise_lacunarity > 1.0:
+            raise BakeError(f"the noise's Lacunarity is {self.noise_lacunarity:g}: the filter needs a value > 1")
         if "Distortion" in noise.inputs and noise.inputs["Distortion"].default_value != 0.0:
             self.warnings.append("statistics were measured with Distortion 0")
         self.noise_detail, self.noise_roughness = detail, roughness
-        stats = noise_statistics.statistics(detail, roughness)
+        self.octave_weights = noise_statistics.octave_weights(detail, roughness)
         # The widest filter needed is the noise's spread over a huge footprint.
-        self.sigma_max = 1.05 * max(stats["sigma"] + [stats["total_std"]])
+        self.sigma_max = 1.05 * noise_statistics.filtered_sigma_max(detail, roughness)
         self.mean_min, self.mean_max = 0.0, 1.0  # the noise's Fac (and its mean) lies in [0, 1]
+        self.orthographic = context.scene.camera is not None and context.scene.camera.type == "CAMERA" and \
+            context.scene.camera.data.type == "ORTHO"
         self.pixel_size, warning = _pixel_size(context.scene)
         if warning:
             self.warnings.append(warning)
@@ -243,9 +248,10 @@ class BakePlan:
         return {"image": image, "path": path, "group": group, "node": group_node}
 
     def _wire_noise(self, tree, group_node, source):
-        stats_image, stats = noise_statistics.statistics_image(self.noise_detail, self.noise_roughness, self.folder)
+        octave_image, table = noise_statistics.octave_image(self.folder)
         noise_filter = tree.nodes.new("ShaderNodeGroup")
-        noise_filter.node_tree = node_groups.noise_filter_group(stats_image, stats, self.filter_stddev)
+        noise_filter.node_tree = node_groups.noise_filter_group(octave_image, table, self.octave_weights,
+                                                                self.noise_lacunarity, self.filter_stddev)
         noise_filter.name = noise_filter.label = "Penumbra Noise Filter"
         noise_filter.location = (group_node.location.x - 220, group_node.location.y + 40)
         footprint = tree.nodes.new("ShaderNodeGroup")
@@ -253,18 +259,23 @@ class BakePlan:
         footprint.name = footprint.label = node_groups.FOOTPRINT
         footprint.location = (group_node.location.x - 440, group_node.location.y - 120)
         footprint.inputs["Pixel Size"].default_value = self.pixel_size or 0.0
-        tree.links.new(source, noise_filter.inputs["Value"])
-        tree.links.new(footprint.outputs["Footprint"], noise_filter.inputs["Footprint"])
+        footprint.inputs["Orthographic"].default_value = 1.0 if self.orthographic else 0.0
+        vector = self.noise.inputs["Vector"]
+        if vector.is_linked:
+            tree.links.new(vector.links[0].from_socket, noise_filter.inputs["Vector"])
+        else:  # an unlinked texture vector means Generated coordinates
+            coords = tree.nodes.new("ShaderNodeTexCoord")
+            coords.name = coords.label = "Penumbra Noise Coordinates"
+            coords.location = (footprint.location.x, footprint.location.y + 200)
+            tree.links.new(coords.outputs["Generated"], noise_filter.inputs["Vector"])
+        tree.links.new(footprint.outputs["Minor"], noise_filter.inputs["Minor"])
+        tree.links.new(footprint.outputs["Major"], noise_filter.inputs["Major"])
         scale_input = self.noise.inputs["Scale"]
         if scale_input.is_linked:
-            multiply = tree.nodes.new("ShaderNodeMath")
-            multiply.operation = "MULTIPLY"
-            multiply.location = (footprint.location.x, footprint.location.y - 160)
-            tree.links.new(scale_input.links[0].from_socket, multiply.inputs[0])
-            multiply.inputs[1].default_value = self.coordinate_scale
-            tree.links.new(multiply.outputs[0], noise_filter.inputs["Scale"])
+            tree.links.new(scale_input.links[0].from_socket, noise_filter.inputs["Scale"])
         else:
-            noise_filter.inputs["Scale"].default_value = scale_input.default_value * self.coordinate_scale
+            noise_filter.inputs["Scale"].default_value = scale_input.default_value
+        noise_filter.inputs["Units per World"].default_value = self.coordinate_scale
         tree.links.new(noise_filter.outputs["Mean"], group_node.inputs["Mean"])
         tree.links.new(noise_filter.outputs["Sigma"], group_node.inputs["Sigma"])
 
@@ -387,8 +398,8 @@ class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):
             targets = [link.to_socket for link in group_node.outputs[out_name].links]
             for socket in targets:
                 tree.links.new(ramp.outputs[out_name], socket)
-        # The helper nodes the bake added (noise filter, footprint, scale
-        # multiply): collect names first, remove after (a removed node frees
+        # The helper nodes the bake added (noise filter, footprint, noise
+        # coordinates): collect names first, remove after (a removed node frees
         # its links, so never remove while walking them).
         doomed = set()
         for socket in group_node.inputs:
@@ -398,7 +409,7 @@ class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):
                     for inner in link.from_node.inputs:
                         for inner_link in inner.links:
                             source = inner_link.from_node
-                            if source.name.startswith(node_groups.FOOTPRINT) or source.bl_idname == "ShaderNodeMath":
+                            if source.name.startswith("Penumbra"):
                                 doomed.add(source.name)
         for name in doomed:
             tree.nodes.remove(tree.nodes[name])
