@@ -139,13 +139,59 @@ def test_bake_replaces_a_noise_driven_ramp_and_keeps_the_original(addon, tmp_pat
 def test_bake_is_undone_and_redone_by_blenders_undo(addon, tmp_path):
     addon.penumbra.colormap.output_folder = str(tmp_path)
     addon.penumbra.colormap.lut_width = addon.penumbra.colormap.lut_height = 16
-    material, ramp = make_ramp_material(noise=False)
+    material, ramp = make_ramp_material(name="undoable", noise=False)
     plane_with(material)
-    before = {n.name for n in material.node_tree.nodes}
-    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
-    assert node_groups.FILTERED_RAMP in material.node_tree.nodes
-    # The muted original keeps its input, so nothing about the ramp was lost.
-    assert before <= {n.name for n in material.node_tree.nodes}
+    before = sorted(n.name for n in material.node_tree.nodes)
+    ramp_name = ramp.name
+    bpy.ops.ed.undo_push(message="before bake")
+    # undo=True: push an undo step as a click in the UI does (bl_options UNDO).
+    assert bpy.ops.penumbra.bake_colormap_lut("EXEC_DEFAULT", True) == {"FINISHED"}
+    baked = sorted(n.name for n in bpy.data.materials["undoable"].node_tree.nodes)
+    assert node_groups.FILTERED_RAMP in baked
+    # Undo restores data blocks from memory: look everything up again by name.
+    assert bpy.ops.ed.undo() == {"FINISHED"}
+    tree = bpy.data.materials["undoable"].node_tree
+    assert sorted(n.name for n in tree.nodes) == before
+    assert not tree.nodes[ramp_name].mute
+    assert bpy.ops.ed.redo() == {"FINISHED"}
+    tree = bpy.data.materials["undoable"].node_tree
+    assert sorted(n.name for n in tree.nodes) == baked
+    assert tree.nodes[ramp_name].mute
+
+
+def test_failure_after_the_lookup_is_written_changes_nothing(addon, tmp_path, monkeypatch):
+    settings = addon.penumbra.colormap
+    settings.output_folder = str(tmp_path)
+    settings.lut_width = settings.lut_height = 16
+    material, ramp = make_ramp_material(name="fragile")
+    plane_with(material)
+    bpy.ops.object.camera_add(location=(0, -6, 3), rotation=(1.1, 0, 0))
+    addon.camera = bpy.context.active_object
+    bpy.context.view_layer.objects.active = bpy.data.objects["Plane"]
+    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}  # an earlier, good bake
+    tree = material.node_tree
+    tree.nodes.active = tree.nodes[node_groups.FILTERED_RAMP]
+    assert bpy.ops.penumbra.restore_color_ramp() == {"FINISHED"}
+    tree.nodes.active = ramp
+    ramp.color_ramp.elements[0].color = (0.0, 1.0, 0.0, 1.0)  # the new bake would differ
+    files = {name: (tmp_path / name).read_bytes() for name in os.listdir(tmp_path)}
+    nodes = sorted(n.name for n in tree.nodes)
+    links = sorted((l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier)
+                   for l in tree.links)
+    images, groups = len(bpy.data.images), len(bpy.data.node_groups)
+
+    def fail(*args, **kwargs):
+        raise RuntimeError("simulated failure while building the node group")
+
+    monkeypatch.setattr(node_groups, "filtered_ramp_group", fail)
+    with pytest.raises(RuntimeError, match="simulated failure"):
+        bpy.ops.penumbra.bake_colormap_lut()
+    assert {name: (tmp_path / name).read_bytes() for name in os.listdir(tmp_path)} == files
+    assert sorted(n.name for n in tree.nodes) == nodes
+    assert sorted((l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier)
+                  for l in tree.links) == links
+    assert (len(bpy.data.images), len(bpy.data.node_groups)) == (images, groups)
+    assert not ramp.mute
 
 
 @pytest.mark.parametrize("problem", ["not_a_ramp", "no_nodes", "nan_colour", "no_material"])

@@ -197,7 +197,7 @@ class BakePlan:
     def write_and_load(self, lut):
         core = native.require()
         os.makedirs(self.folder, exist_ok=True)
-        path = os.path.join(self.folder, f"{self.name}_lut.exr")
+        path = self.lookup_paths()[0]
         # σ = 0 at the bottom (Blender's v = 0), so the node maps σ to v directly.
         pixels = np.ascontiguousarray(lut[::-1])
         core.write_exr(path, pixels, half=False, colorspace="Non-Color")
@@ -216,6 +216,22 @@ class BakePlan:
         return image, path
 
     def apply(self, lut):
+        """Writes the files and edits the tree; if anything fails, puts the
+        tree, the data blocks and the output folder back as they were."""
+        rollback = _Rollback(self)
+        try:
+            return self._apply(lut)
+        except BaseException:
+            rollback.restore()
+            raise
+        finally:
+            rollback.discard_backups()
+
+    def lookup_paths(self):
+        exr = os.path.join(self.folder, f"{self.name}_lut.exr")
+        return exr, os.path.splitext(exr)[0] + ".png"
+
+    def _apply(self, lut):
         image, path = self.write_and_load(lut)
         if self.node is None:
             group = node_groups.filtered_ramp_group(image, self.spec)
@@ -278,6 +294,61 @@ class BakePlan:
         noise_filter.inputs["Units per World"].default_value = self.coordinate_scale
         tree.links.new(noise_filter.outputs["Mean"], group_node.inputs["Mean"])
         tree.links.new(noise_filter.outputs["Sigma"], group_node.inputs["Sigma"])
+
+
+class _Rollback:
+    """What apply() may change, recorded before it starts: the tree's nodes,
+    links and the ramp's state, the image and node-group data blocks, and the
+    output folder (new files are removed, overwritten lookups restored)."""
+
+    def __init__(self, plan):
+        self.tree = plan.material.node_tree if plan.node is not None else None
+        self.ramp = plan.node
+        self.nodes = {n.name for n in self.tree.nodes} if self.tree else set()
+        self.links = [(l.from_socket, l.to_socket) for l in self.tree.links] if self.tree else []
+        self.ramp_state = (plan.node.mute, plan.node.label, tuple(plan.node.location)) if plan.node else None
+        self.images = set(bpy.data.images[:])
+        self.groups = set(bpy.data.node_groups[:])
+        self.folder = plan.folder
+        self.created_folder = not os.path.isdir(self.folder)
+        self.files = set() if self.created_folder else set(os.listdir(self.folder))
+        self.backups = {}
+        for path in plan.lookup_paths():
+            if os.path.isfile(path):
+                backup = path + ".penumbra-backup"
+                os.replace(path, backup)
+                self.backups[path] = backup
+
+    def restore(self):
+        if self.tree is not None:
+            for node in [n for n in self.tree.nodes if n.name not in self.nodes]:
+                self.tree.nodes.remove(node)
+            for from_socket, to_socket in self.links:
+                if not any(l.from_socket == from_socket for l in to_socket.links):
+                    self.tree.links.new(from_socket, to_socket)
+            self.ramp.mute, self.ramp.label, self.ramp.location = self.ramp_state
+        for group in [g for g in bpy.data.node_groups if g not in self.groups]:
+            bpy.data.node_groups.remove(group)
+        for image in [i for i in bpy.data.images if i not in self.images]:
+            bpy.data.images.remove(image)
+        if os.path.isdir(self.folder):
+            for name in set(os.listdir(self.folder)) - self.files:
+                if not name.endswith(".penumbra-backup"):
+                    os.remove(os.path.join(self.folder, name))
+        for path, backup in self.backups.items():
+            os.replace(backup, path)
+            for image in self.images:  # an earlier lookup reloaded from the new file
+                if image.filepath and os.path.normpath(bpy.path.abspath(image.filepath)) == path:
+                    image.reload()
+        self.backups = {}
+        if self.created_folder and os.path.isdir(self.folder) and not os.listdir(self.folder):
+            os.rmdir(self.folder)
+
+    def discard_backups(self):
+        for backup in self.backups.values():
+            if os.path.exists(backup):
+                os.remove(backup)
+        self.backups = {}
 
 
 def _report_done(op, plan, result):
