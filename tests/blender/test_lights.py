@@ -65,6 +65,17 @@ def _map_irradiance(img, normals):
     return np.clip(normals @ d.T, 0, None) @ flux
 
 
+def _sun_rgb(ob):
+    """∫L dω a sun carries. Blender 4.x Cycles: a uniform cone of half-angle
+    h whose facing irradiance is the strength, so ∫L dω = strength·2/(1+cos h);
+    3.x: a disc whose ∫L dω is the strength (checked by the render tests
+    below against Cycles itself)."""
+    rgb = np.array(ob.data.color) * ob.data.energy
+    if bpy.app.version >= (4, 0, 0):
+        rgb = rgb * 2.0 / (1.0 + math.cos(ob.data.angle / 2))
+    return rgb
+
+
 def _rig_irradiance(scene, normals):
     """Irradiance from the suns as Blender holds them at the current frame."""
     e = np.zeros((len(normals), 3))
@@ -72,7 +83,7 @@ def _rig_irradiance(scene, normals):
         if ob.type != "LIGHT":
             continue
         d = (ob.matrix_world.to_3x3() @ mathutils.Vector((0, 0, 1))).normalized()
-        rgb = np.array(ob.data.color) * ob.data.energy
+        rgb = _sun_rgb(ob)
         e += np.clip(normals @ np.array(d), 0, None)[:, None] * rgb[None, :]
     return e
 
@@ -120,7 +131,7 @@ def test_rig_reproduces_the_maps_irradiance_and_is_updated_not_duplicated(addon,
     assert rel < 0.03, rel
     # Colour: the summed RGB is the map's integral per channel.
     total = (img * _solid_angles(*img.shape[:2])[:, None, None]).sum(axis=(0, 1))
-    rgb = sum(np.array(o.data.color) * o.data.energy for o in suns)
+    rgb = sum(_sun_rgb(o) for o in suns)
     np.testing.assert_allclose(rgb, total, rtol=1e-4)
     # JSON beside: one frame, 64 lights, unit directions, same totals.
     doc = json.load(open(json_path))
@@ -205,11 +216,8 @@ def _render_plane(scene, tmp_path, name):
     return pixels.reshape(-1, 3).mean(axis=0)
 
 
-def test_cycles_render_lit_by_the_rig_matches_the_world(addon, tmp_path):
-    scene = addon
-    img = _sky_and_sun(radius=0.2, sun_radiance=20.0)
-    path = _write_map(str(tmp_path / "map.exr"), img)
-    _world_with(scene, path)
+def _plane_and_camera(scene):
+    """A white diffuse plane facing up and an orthographic camera above it."""
     bpy.ops.mesh.primitive_plane_add(size=4.0)
     plane = bpy.context.active_object
     mat = bpy.data.materials.new("White")
@@ -230,18 +238,72 @@ def test_cycles_render_lit_by_the_rig_matches_the_world(addon, tmp_path):
     scene.collection.objects.link(cam)
     scene.camera = cam
     plane.visible_camera = True
-    world_lit = _render_plane(scene, tmp_path, "world")
-    assert bpy.ops.penumbra.build_light_rig(count=64, json_path=str(tmp_path / "r.json")) == {"FINISHED"}
+
+
+def _black_world(scene):
     black = bpy.data.worlds.new("Black")
     black.use_nodes = True
     black.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     scene.world = black
+
+
+def test_cycles_render_lit_by_the_rig_matches_the_world(addon, tmp_path):
+    scene = addon
+    img = _sky_and_sun(radius=0.2, sun_radiance=20.0)
+    path = _write_map(str(tmp_path / "map.exr"), img)
+    _world_with(scene, path)
+    _plane_and_camera(scene)
+    world_lit = _render_plane(scene, tmp_path, "world")
+    assert bpy.ops.penumbra.build_light_rig(count=64, json_path=str(tmp_path / "r.json")) == {"FINISHED"}
+    _black_world(scene)
     rig_lit = _render_plane(scene, tmp_path, "rig")
     # Lambertian plane facing up: pixel = albedo · E(up) / π. Both renders
     # must agree (Monte Carlo noise at 64 spp × 1024 pixels is well under 1%).
     expected = 0.8 * _map_irradiance(img, np.array([[0.0, 0.0, 1.0]]))[0] / math.pi
     np.testing.assert_allclose(world_lit, expected, rtol=0.04)
     np.testing.assert_allclose(rig_lit, world_lit, rtol=0.04)
+
+
+def test_a_wide_sun_carries_its_regions_light_in_cycles(addon, tmp_path):
+    """One light for a uniform cap of half-angle 40° at the zenith: a sun of
+    about 80°. The plane lit by it must match the plane lit by the World
+    (Cycles' own evaluation of the map). Before the strength was scaled by
+    (1 + cos h)/2, Blender 4.x rendered it ~13% too bright."""
+    scene = addon
+    h, w = 64, 128
+    img = np.zeros((h, w, 3), np.float32)
+    img[_directions(h, w)[..., 2] >= math.cos(math.radians(40))] = (2.0, 1.5, 1.0)
+    path = _write_map(str(tmp_path / "cap.exr"), img)
+    _world_with(scene, path)
+    _plane_and_camera(scene)
+    world_lit = _render_plane(scene, tmp_path, "world")
+    assert bpy.ops.penumbra.build_light_rig(count=1, json_path=str(tmp_path / "r.json")) == {"FINISHED"}
+    sun = next(o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT")
+    assert 70 < math.degrees(sun.data.angle) < 85, math.degrees(sun.data.angle)
+    _black_world(scene)
+    rig_lit = _render_plane(scene, tmp_path, "rig")
+    expected = 0.8 * _map_irradiance(img, np.array([[0.0, 0.0, 1.0]]))[0] / math.pi
+    np.testing.assert_allclose(world_lit, expected, rtol=0.03)
+    np.testing.assert_allclose(rig_lit, world_lit, rtol=0.04)
+
+
+def test_a_one_pixel_region_gives_a_sun_that_lights(addon, tmp_path):
+    """A region of one map cell has an RMS radius of rounding noise
+    (~1e-16 rad). Written as the sun's angle, Cycles (3.4 and 4.5) renders
+    such a sun black (its cone pdf overflows); it must be written as 0."""
+    from penumbra.lights import rig_objects
+    scene = addon
+    _plane_and_camera(scene)
+    _black_world(scene)
+    d = np.array([0.3, 0.0, 1.0]) / math.hypot(0.3, 1.0)
+    rig = {"slots": 1, "rgb": np.array([[[2.0, 2.0, 2.0]]]), "directions": d[None, None, :],
+           "spread": np.array([[5.7e-17]]), "power": np.array([[2.0]])}
+    write = rig_objects.write_rig(scene, scene.penumbra.light_rig, rig, 1, False)
+    write.commit()
+    lit = _render_plane(scene, tmp_path, "tiny")
+    np.testing.assert_allclose(lit, 0.8 * 2.0 * d[2] / math.pi, rtol=0.01)
+    sun = next(o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT")
+    assert sun.data.angle == 0.0
 
 
 def _rig_state(scene, json_path):

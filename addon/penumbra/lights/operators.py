@@ -170,7 +170,7 @@ class _Job:
             "source": self.path or "World image (packed)",
             "coordinates": "Blender world: +Z up; direction points from the scene towards the light",
             "units": "rgb = irradiance in W/m^2 on a surface facing the light, scene-linear "
-                     "(Blender sun: strength = max(rgb), colour = rgb / strength)",
+                     "(a point-like Blender sun: strength = max(rgb), colour = rgb / strength)",
             "frames_per_second": rig["frames_per_second"],
             "filter_taps": list(rig["filter_taps"]),
             "frames": frames,
