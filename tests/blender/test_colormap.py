@@ -422,6 +422,28 @@ def test_footprint_node_matches_the_projected_pixel(addon, tmp_path):
             checked += 1
     assert checked >= 15
 
+    # Position + Centre Offset: where the ray through the pixel's centre meets
+    # the plane, the same for every sample of the pixel. A 1-px box filter at
+    # 8 spp keeps the samples inside their pixel and spreads them over it.
+    addon.cycles.filter_width = 1.0
+    geometry = tree.nodes.new("ShaderNodeNewGeometry")
+    add = tree.nodes.new("ShaderNodeVectorMath")
+    add.operation = "ADD"
+    tree.links.new(geometry.outputs["Position"], add.inputs[0])
+    tree.links.new(footprint.outputs["Centre Offset"], add.inputs[1])
+    tree.links.new(add.outputs[0], emission.inputs["Color"])
+    snapped = _render(addon, str(tmp_path / "centre.exr"), 8, 3)
+    tree.links.new(geometry.outputs["Position"], emission.inputs["Color"])
+    raw = _render(addon, str(tmp_path / "position.exr"), 8, 3)
+    moved = 0
+    for y in range(2, RENDER_H, 5):
+        for x in (3, RENDER_W // 2, RENDER_W - 4):
+            centre = on_plane(x + 0.5, y + 0.5)
+            pixel = np.linalg.norm(on_plane(x + 1.0, y + 0.5) - on_plane(x, y + 0.5))
+            np.testing.assert_allclose(snapped[y, x, :2], centre, atol=1e-3 * pixel, err_msg=f"pixel {x}, {y}")
+            moved += np.linalg.norm(raw[y, x, :2] - centre) > 0.01 * pixel
+    assert moved > 10  # the raw position does differ from the centre
+
 
 def test_filtered_render_is_closer_to_the_reference_than_the_plain_ramp(addon, tmp_path):
     """A small Cycles render: the plane receding to the horizon through a

@@ -3,11 +3,13 @@
 - "Penumbra Filtered Ramp" (one per lookup image): Mean, Sigma -> Color,
   Alpha. Maps (mean, σ) to the lookup's texel centres and samples it with an
   Image Texture node set to Linear / EXTEND (no wrap at the edges).
-- "Penumbra Pixel Footprint": Pixel Size, Orthographic -> Footprint, Minor,
-  Major: the pixel's footprint on the surface from the Jacobian of the
-  camera projection (see docs/colormap.md, "Footprint").
+- "Penumbra Pixel Footprint": Pixel Size, Orthographic, Raster Offset X/Y
+  -> Footprint, Minor, Major, Axis U, Axis V, Centre Offset: the pixel's
+  footprint on the surface from the Jacobian of the camera projection, and
+  the offset to the pixel's centre (see docs/colormap.md, "Footprint").
 - "Penumbra Noise Filter" (per noise setting): Vector, Scale, Units per
-  World, Minor, Major -> Mean, Sigma, the octave-wise filter of the noise.
+  World, Minor, Major, Axis U, Axis V, Centre Offset -> Mean, Sigma, the
+  octave-wise filter of the noise with 16 taps over the footprint.
 - "Penumbra Height Filtered Ramp" / "Penumbra Slope Filtered Ramp": paper
   Sec. 5.1 / 5.2, reading the microsurface statistics image.
 Groups are built with interface.add_socket, so the same code makes them in
@@ -29,6 +31,11 @@ HEIGHT_RAMP = "Penumbra Height Filtered Ramp"
 SLOPE_RAMP = "Penumbra Slope Filtered Ramp"
 MICROSURFACE_IMAGE = "Penumbra Microsurface Statistics"
 MICROSURFACE_TABLE_SIZE = 256
+# Tap positions along the footprint's major axis, in filter standard
+# deviations: the Gaussian's quantiles at (k + 1/2)/8 scaled to unit variance
+# (equal weights); two taps (±1) along the minor axis: 16 taps in all.
+_Q = (-1.5341, -0.8871, -0.4888, -0.1573, 0.1573, 0.4888, 0.8871, 1.5341)
+MAJOR_TAPS = tuple(x / math.sqrt(sum(v * v for v in _Q) / len(_Q)) for x in _Q)
 
 
 class _Builder:
@@ -172,38 +179,50 @@ def filtered_ramp_group(image, spec, name=FILTERED_RAMP):
 
 
 def footprint_group():
-    """Pixel Size, Orthographic -> Footprint, Minor, Major: the pixel's
-    footprint on the surface from the Jacobian J = ∂P/∂(pixel) of the point P
-    seen through the pixel, for a locally flat surface of normal N:
-    J_u = λ p (R − (R·N)/(r·N) r) (same with U), r = the view ray scaled to a
-    unit component along the camera's forward axis F, R and U an orthonormal
-    basis of the image plane, λ p the pixel's width at the point (perspective:
-    view depth z times the pixel size at unit depth; orthographic: the
-    pixel size itself). Footprint = sqrt|J_u × J_v| (side of the square of the
-    same area), Major/Minor = the singular values of J (the footprint
-    ellipse's axes). The camera axes come from a Vector Transform
+    """Pixel Size, Orthographic, Raster Offset X/Y -> Footprint, Minor, Major,
+    Axis U, Axis V, Centre Offset: the pixel's footprint on the surface from
+    the Jacobian J = ∂P/∂(pixel) of the point P seen through the pixel, for a
+    locally flat surface of normal N: J_u = λ p (R − (R·N)/(r·N) r) (same
+    with U), r = the view ray scaled to a unit component along the camera's
+    forward axis F, R and U an orthonormal basis of the image plane, λ p the
+    pixel's width at the point (perspective: view depth z times the pixel
+    size at unit depth; orthographic: the pixel size itself). Footprint =
+    sqrt|J_u × J_v| (side of the square of the same area), Major/Minor = the
+    singular values of J (the footprint ellipse's axes), Axis U/V = J_u, J_v
+    (world). Centre Offset = (the point where the ray through the centre of
+    this sample's pixel meets the tangent plane) − P, so P + Centre Offset is
+    the same for every sample of a pixel (zero where that ray misses the
+    plane). The pixel is found from the image-plane position: raster =
+    position / pixel size + Raster Offset (half the resolution), pixel centre
+    = floor(raster) + 0.5. The camera axes come from a Vector Transform
     (Camera → World); F's sign is fixed by F·(−Incoming) > 0, so the result
     does not depend on the renderer's camera-space convention."""
     group = bpy.data.node_groups.get(FOOTPRINT)
-    if group is not None and "Major" in interface.socket_names(group, "OUTPUT"):
+    if group is not None and "Centre Offset" in interface.socket_names(group, "OUTPUT"):
         return group
     if group is not None:
         group.name = FOOTPRINT + " (old)"
     group, gin, gout = _new_group(FOOTPRINT, [("Pixel Size", "NodeSocketFloat", 0.001),
-                                              ("Orthographic", "NodeSocketFloat", 0.0)],
+                                              ("Orthographic", "NodeSocketFloat", 0.0),
+                                              ("Raster Offset X", "NodeSocketFloat", 0.0),
+                                              ("Raster Offset Y", "NodeSocketFloat", 0.0)],
                                   [("Footprint", "NodeSocketFloat"), ("Minor", "NodeSocketFloat"),
-                                   ("Major", "NodeSocketFloat")])
+                                   ("Major", "NodeSocketFloat"), ("Axis U", "NodeSocketVector"),
+                                   ("Axis V", "NodeSocketVector"), ("Centre Offset", "NodeSocketVector")])
     b = _Builder(group)
     camera = b.nodes.new("ShaderNodeCameraData")
     geometry = b.nodes.new("ShaderNodeNewGeometry")
 
-    def camera_axis(axis):
+    def camera_transform(vector, kind="VECTOR"):
         node = b._place(b.nodes.new("ShaderNodeVectorTransform"))
-        node.vector_type = "VECTOR"
+        node.vector_type = kind
         node.convert_from = "CAMERA"
         node.convert_to = "WORLD"
-        node.inputs[0].default_value = axis
-        return b.vmath("NORMALIZE", node.outputs[0])
+        node.inputs[0].default_value = vector
+        return node.outputs[0]
+
+    def camera_axis(axis):
+        return b.vmath("NORMALIZE", camera_transform(axis))
 
     to_point = b.vscale(geometry.outputs["Incoming"], -1.0)      # unit vector camera -> point
     f_axis = camera_axis((0.0, 0.0, 1.0))
@@ -218,9 +237,10 @@ def footprint_group():
     ray_n = b.vmath("DOT_PRODUCT", ray, normal)
     inv_ray_n = b.math("DIVIDE", ray_n, b.math("MAXIMUM", b.math("MULTIPLY", ray_n, ray_n), 1e-12))
     ortho = gin.outputs["Orthographic"]
-    width = b.math("MULTIPLY", gin.outputs["Pixel Size"],
-                   b.math("ADD", b.math("MULTIPLY", camera.outputs["View Z Depth"], b.math("SUBTRACT", 1.0, ortho)),
-                          ortho))
+    perspective = b.math("SUBTRACT", 1.0, ortho)
+    pixel = gin.outputs["Pixel Size"]
+    width = b.math("MULTIPLY", pixel,
+                   b.math("ADD", b.math("MULTIPLY", camera.outputs["View Z Depth"], perspective), ortho))
 
     def column(axis):
         k = b.math("MULTIPLY", b.vmath("DOT_PRODUCT", axis, normal), inv_ray_n)
@@ -237,23 +257,66 @@ def footprint_group():
     b.links.new(b.math("SQRT", area), gout.inputs["Footprint"])
     b.links.new(major, gout.inputs["Major"])
     b.links.new(b.math("DIVIDE", area, b.math("MAXIMUM", major, 1e-30)), gout.inputs["Minor"])
+    b.links.new(ju, gout.inputs["Axis U"])
+    b.links.new(jv, gout.inputs["Axis V"])
+
+    # The pixel centre: image-plane coordinates in pixels (perspective: the
+    # ray's slope over the pixel size at unit depth; orthographic: the
+    # offset from the camera over the pixel size), snapped to the centre.
+    origin = camera_transform((0.0, 0.0, 0.0), "POINT")
+    position = geometry.outputs["Position"]
+    relative = b.vmath("SUBTRACT", position, origin)
+    inv_pixel = b.math("DIVIDE", 1.0, b.math("MAXIMUM", pixel, 1e-30))
+    depth_scale = b.math("ADD", b.math("MULTIPLY", b.math("DIVIDE", 1.0, b.math(
+        "MAXIMUM", b.vmath("DOT_PRODUCT", relative, forward), 1e-12)), perspective), ortho)
+
+    def centre(axis, offset):
+        raster = b.math("MULTIPLY_ADD", b.math("MULTIPLY", b.vmath("DOT_PRODUCT", relative, axis), depth_scale),
+                        inv_pixel, offset)
+        snapped = b.math("SUBTRACT", b.math("ADD", b.math("FLOOR", raster), 0.5), offset)
+        return b.math("MULTIPLY", snapped, pixel)
+
+    lateral = b.vmath("ADD", b.vscale(right, centre(right, gin.outputs["Raster Offset X"])),
+                      b.vscale(up, centre(up, gin.outputs["Raster Offset Y"])))
+    ray_origin = b.vmath("ADD", origin, b.vscale(lateral, ortho))
+    direction = b.vmath("ADD", forward, b.vscale(lateral, perspective))
+    dir_n = b.vmath("DOT_PRODUCT", direction, normal)
+    safe_dir_n = b.math("DIVIDE", dir_n, b.math("MAXIMUM", b.math("MULTIPLY", dir_n, dir_n), 1e-24))
+    t = b.math("MULTIPLY", b.vmath("DOT_PRODUCT", b.vmath("SUBTRACT", position, ray_origin), normal), safe_dir_n)
+    offset = b.vmath("SUBTRACT", b.vmath("ADD", ray_origin, b.vscale(direction, t)), position)
+    # Keep the offset only where the centre ray meets the plane in front of
+    # the camera and not absurdly far from the sample (near the horizon).
+    in_front = b.math("MAXIMUM", b.math("GREATER_THAN", t, 0.0), ortho)
+    reach = b.math("MULTIPLY", b.math("ADD", b.vmath("LENGTH", ju), b.vmath("LENGTH", jv)), 2.0)
+    near = b.math("LESS_THAN", b.vmath("LENGTH", offset), reach)
+    b.links.new(b.vscale(offset, b.math("MULTIPLY", in_front, near)), gout.inputs["Centre Offset"])
     return group
 
 
 def noise_filter_group(octave_image, table, weights, lacunarity, filter_stddev_px):
-    """Vector, Scale, Units per World, Minor, Major -> Mean, Sigma, the
-    octave-wise filter of a normalized fBm Noise Texture (docs/colormap.md,
-    "Octave filter"). The noise is rebuilt from its octaves (Noise Textures at
-    Detail 0, Scale·lacunarity^i, weights w_i: exactly Blender's Fac). Over a
-    footprint of standard deviations s·(1, e) (s = κ·Minor·Scale·Units per
-    World, e = Major/Minor, κ the pixel filter's standard deviation in
-    pixels) octave i keeps the fraction q_i = q(s·lacunarity^i, e) of its
-    variance inside the footprint (measured table). Mean = 0.5 + Σ w_i g_i
-    (Fac_i − 0.5) with g_i = 1 − q_i (an octave that varies inside the pixel
-    is faded out, one that does not is kept, so the mean is nearly constant
-    across the pixel); Sigma² = V₀ Σ w_i² q_i (1 − g_i²), the variance inside
-    the footprint not already carried by the sampled mean."""
-    key = "/".join(f"{w:.6g}" for w in weights) + f" l{lacunarity:g} k{filter_stddev_px:.4g}"
+    """Vector, Scale, Units per World, Minor, Major, Axis U, Axis V, Centre
+    Offset -> Mean, Sigma, the octave-wise filter of a normalized fBm Noise
+    Texture (docs/colormap.md, "Octave filter"). The noise is rebuilt from its
+    octaves (Noise Textures at Detail 0, Scale·lacunarity^i, weights w_i:
+    exactly Blender's Fac). Each octave is evaluated at 16 taps around the
+    centre of the sample's pixel, P + Centre Offset + κ(n·m + t·M): n = ±1
+    along the footprint ellipse's minor axis m, t = MAJOR_TAPS along its major
+    axis M (κ the pixel filter's standard deviation in pixels; offsets taken
+    to the noise's coordinates by the object's inverse transform and Units per
+    World), so their average A_i estimates the octave's pixel mean and is the
+    same for every sample of the pixel. Over a footprint of standard
+    deviations s·(1, e) (s = κ·Minor·Scale·Units per World, e = Major/Minor)
+    octave i keeps the fraction q_i = q(s·lacunarity^i, e) of its variance
+    inside the pixel (measured table); the taps estimate the pixel mean with
+    an error of about e_i = q_i²/N of the octave's variance (N = 16 taps:
+    fourth order for smooth octaves, the variance of N uncorrelated taps for
+    fine ones). Mean = 0.5 + Σ w_i g_i (A_i − 0.5), g_i = (1 − q_i)/(1 − q_i +
+    e_i) (least-squares shrinkage). Sigma² = the taps' spread of
+    Σ w_i g_i (Fac_i − 0.5) (the local within-pixel variance of what the mean
+    keeps) + V₀ Σ w_i² (max(q_i − g_i² q_i (1 − q_i/N), 0) + (1 − q_i) e_i /
+    (1 − q_i + e_i)): the within-pixel variance the spread misses on average,
+    plus the remaining uncertainty of the mean."""
+    key = "/".join(f"{w:.6g}" for w in weights) + f" l{lacunarity:g} k{filter_stddev_px:.4g} taps16"
     name = f"{NOISE_FILTER} ({key})"
     group = bpy.data.node_groups.get(name)
     if group is not None:
@@ -261,7 +324,10 @@ def noise_filter_group(octave_image, table, weights, lacunarity, filter_stddev_p
     group, gin, gout = _new_group(name, [("Vector", "NodeSocketVector", (0.0, 0.0, 0.0)),
                                          ("Scale", "NodeSocketFloat", 5.0),
                                          ("Units per World", "NodeSocketFloat", 1.0),
-                                         ("Minor", "NodeSocketFloat", 0.0), ("Major", "NodeSocketFloat", 0.0)],
+                                         ("Minor", "NodeSocketFloat", 0.0), ("Major", "NodeSocketFloat", 0.0),
+                                         ("Axis U", "NodeSocketVector", (0.0, 0.0, 0.0)),
+                                         ("Axis V", "NodeSocketVector", (0.0, 0.0, 0.0)),
+                                         ("Centre Offset", "NodeSocketVector", (0.0, 0.0, 0.0))],
                                   [("Mean", "NodeSocketFloat"), ("Sigma", "NodeSocketFloat")])
     group["penumbra_octave_weights"] = list(weights)
     b = _Builder(group)
@@ -272,28 +338,101 @@ def noise_filter_group(octave_image, table, weights, lacunarity, filter_stddev_p
     log2_s = b.math("LOGARITHM", b.math("MAXIMUM", s, 1e-12), 2.0)
     log2_e = b.math("LOGARITHM", b.math("MAXIMUM", b.math("DIVIDE", gin.outputs["Major"], minor), 1.0), 2.0)
     v = b.texel(b.math("MINIMUM", b.math("MULTIPLY", log2_e, 1.0 / elongations[-1]), 1.0), len(elongations))
+
+    # World offsets -> the noise's coordinates: directions by the object's
+    # inverse transform, lengths by Units per World.
+    def to_object(vector):
+        node = b._place(b.nodes.new("ShaderNodeVectorTransform"))
+        node.vector_type = "VECTOR"
+        node.convert_from = "WORLD"
+        node.convert_to = "OBJECT"
+        b.links.new(vector, node.inputs[0])
+        return node.outputs[0]
+
+    axis_u, axis_v = gin.outputs["Axis U"], gin.outputs["Axis V"]
+    ref = b.vmath("ADD", axis_u, axis_v)
+    ref_object = to_object(ref)
+    k = b.math("DIVIDE", b.math("MULTIPLY", b.vmath("LENGTH", ref), gin.outputs["Units per World"]),
+               b.math("MAXIMUM", b.vmath("LENGTH", ref_object), 1e-30))
+    # Principal axes of the footprint: p1 = the unit pixel-space direction J
+    # stretches most (eigenvector of JᵀJ = [[a, h], [h, c]]), p2 ⟂ p1.
+    a = b.vmath("DOT_PRODUCT", axis_u, axis_u)
+    c = b.vmath("DOT_PRODUCT", axis_v, axis_v)
+    h = b.vmath("DOT_PRODUCT", axis_u, axis_v)
+    half_diff = b.math("MULTIPLY", b.math("SUBTRACT", a, c), 0.5)
+    root = b.math("SQRT", b.math("MULTIPLY_ADD", half_diff, half_diff, b.math("MULTIPLY", h, h)))
+    tiny = b.math("MULTIPLY", b.math("ADD", a, c), 1e-6)
+    u_wider = b.math("GREATER_THAN", a, c)       # 1: use (λ1 − c, h), else (h, λ1 − a)
+    x1 = b.math("ADD", b.math("MULTIPLY", b.math("ADD", b.math("ADD", half_diff, root), tiny), u_wider),
+                b.math("MULTIPLY", h, b.math("SUBTRACT", 1.0, u_wider)))
+    y1 = b.math("ADD", b.math("MULTIPLY", h, u_wider),
+                b.math("MULTIPLY", b.math("ADD", b.math("SUBTRACT", root, half_diff), tiny),
+                       b.math("SUBTRACT", 1.0, u_wider)))
+    norm = b.math("DIVIDE", 1.0, b.math("MAXIMUM", b.math("SQRT", b.math("MULTIPLY_ADD", x1, x1,
+                                                                          b.math("MULTIPLY", y1, y1))), 1e-30))
+    x1, y1 = b.math("MULTIPLY", x1, norm), b.math("MULTIPLY", y1, norm)
+    major_axis = b.vmath("ADD", b.vscale(axis_u, x1), b.vscale(axis_v, y1))
+    minor_axis = b.vmath("SUBTRACT", b.vscale(axis_v, x1), b.vscale(axis_u, y1))
+    km = b.vscale(to_object(major_axis), b.math("MULTIPLY", k, filter_stddev_px))
+    kn = b.vscale(to_object(minor_axis), b.math("MULTIPLY", k, filter_stddev_px))
+    base = b.vmath("ADD", gin.outputs["Vector"], b.vscale(to_object(gin.outputs["Centre Offset"]), k))
+    taps = []
+    for side in (-1.0, 1.0):
+        row = b.vmath("ADD", base, b.vscale(kn, side))
+        for t in MAJOR_TAPS:
+            taps.append(b.vmath("ADD", row, b.vscale(km, t)))
+    tap_floor = 1.0 / len(taps)   # variance of the tap average of uncorrelated taps
     mean = 0.5
     variance = 0.0
+    tap_sums = [0.0] * len(taps)   # Σ_i w_i g_i (Fac_i(tap) − 0.5) per tap
     for i, w in enumerate(weights):
-        noise = b._place(b.nodes.new("ShaderNodeTexNoise"))
-        noise.noise_dimensions = "3D"
-        if hasattr(noise, "normalize"):
-            noise.normalize = True
-        if hasattr(noise, "noise_type"):
-            noise.noise_type = "FBM"
-        noise.inputs["Detail"].default_value = 0.0
-        noise.inputs["Distortion"].default_value = 0.0
-        b.links.new(gin.outputs["Vector"], noise.inputs["Vector"])
-        b.connect(b.math("MULTIPLY", gin.outputs["Scale"], lacunarity ** i), noise.inputs["Scale"])
+        scale = b.math("MULTIPLY", gin.outputs["Scale"], lacunarity ** i)
+        total = None
+        values = []
+        for tap in taps:
+            noise = b._place(b.nodes.new("ShaderNodeTexNoise"))
+            noise.noise_dimensions = "3D"
+            if hasattr(noise, "normalize"):
+                noise.normalize = True
+            if hasattr(noise, "noise_type"):
+                noise.noise_type = "FBM"
+            noise.inputs["Detail"].default_value = 0.0
+            noise.inputs["Distortion"].default_value = 0.0
+            b.links.new(tap, noise.inputs["Vector"])
+            b.connect(scale, noise.inputs["Scale"])
+            values.append(noise.outputs["Fac"])
+            total = noise.outputs["Fac"] if total is None else b.math("ADD", total, noise.outputs["Fac"])
+        average = b.math("MULTIPLY", total, 1.0 / len(taps))
         shift = i * math.log2(lacunarity)
         u = b.texel(b.math("MULTIPLY_ADD", log2_s, 1.0 / (logs[-1] - logs[0]),
                            (shift - logs[0]) / (logs[-1] - logs[0])), len(logs))
         q, _, _ = b.separate(b.image(octave_image, b.combine(u, v)).outputs["Color"])
-        g = b.math("SUBTRACT", 1.0, q)
-        mean = b.math("MULTIPLY_ADD", b.math("SUBTRACT", noise.outputs["Fac"], 0.5), b.math("MULTIPLY", g, w), mean)
-        # q (1 − g²) weighted by V₀ w_i²
-        term = b.math("MULTIPLY", q, b.math("SUBTRACT", 1.0, b.math("MULTIPLY", g, g)))
+        kept = b.math("SUBTRACT", 1.0, q)
+        tap_error = b.math("MULTIPLY", b.math("MULTIPLY", q, q), tap_floor)
+        denominator = b.math("MAXIMUM", b.math("ADD", kept, tap_error), 1e-9)
+        g = b.math("DIVIDE", kept, denominator)
+        wg = b.math("MULTIPLY", g, w)
+        mean = b.math("MULTIPLY_ADD", b.math("SUBTRACT", average, 0.5), wg, mean)
+        for t, value in enumerate(values):
+            tap_sums[t] = b.math("MULTIPLY_ADD", b.math("SUBTRACT", value, 0.5), wg, tap_sums[t])
+        # Not seen by the taps' spread: q − g² q (1 − q/N) (the expected spread
+        # of N taps), plus the uncertainty of the mean (1 − q) e/(1 − q + e).
+        captured = b.math("MULTIPLY", b.math("MULTIPLY", g, g),
+                          b.math("MULTIPLY", q, b.math("MULTIPLY_ADD", q, -1.0 / len(taps), 1.0)))
+        term = b.math("ADD", b.math("MAXIMUM", b.math("SUBTRACT", q, captured), 0.0),
+                      b.math("MULTIPLY", g, tap_error))
         variance = b.math("MULTIPLY_ADD", term, table["total_var"] * w * w, variance)
+    # The spread of the weighted taps: the local within-pixel variance of the
+    # octaves the mean keeps (exact for a field linear across the pixel).
+    tap_mean = 0.0
+    tap_square = 0.0
+    for value in tap_sums:
+        tap_mean = b.math("ADD", tap_mean, value)
+        tap_square = b.math("MULTIPLY_ADD", value, value, tap_square)
+    tap_mean = b.math("MULTIPLY", tap_mean, 1.0 / len(tap_sums))
+    spread = b.math("SUBTRACT", b.math("MULTIPLY", tap_square, 1.0 / len(tap_sums)),
+                    b.math("MULTIPLY", tap_mean, tap_mean))
+    variance = b.math("ADD", variance, b.math("MAXIMUM", spread, 0.0))
     b.connect(mean, gout.inputs["Mean"])
     b.links.new(b.math("SQRT", b.math("MAXIMUM", variance, 0.0)), gout.inputs["Sigma"])
     return group

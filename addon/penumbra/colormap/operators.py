@@ -54,6 +54,20 @@ def _pixel_size(scene):
     return 2.0 * math.tan(data.angle_x / 2.0) / res_x, None
 
 
+def _raster_offset(scene):
+    """Raster position of the optical axis, in pixels (half the resolution,
+    moved by the camera's shift): the footprint group snaps a sample to its
+    pixel's centre with it."""
+    scale = scene.render.resolution_percentage / 100.0
+    res_x, res_y = scene.render.resolution_x * scale, scene.render.resolution_y * scale
+    camera = scene.camera
+    shift_x = shift_y = 0.0
+    if camera is not None and camera.type == "CAMERA":
+        shift_x, shift_y = camera.data.shift_x, camera.data.shift_y
+    size = max(res_x, res_y)
+    return res_x / 2.0 - shift_x * size, res_y / 2.0 - shift_y * size
+
+
 def _coordinate_scale(noise, obj):
     """Texture-coordinate units per world unit of the noise's Vector input
     (Generated / unlinked: 1 / object dimensions; Object: 1 / object scale)."""
@@ -166,6 +180,7 @@ class BakePlan:
         self.orthographic = context.scene.camera is not None and context.scene.camera.type == "CAMERA" and \
             context.scene.camera.data.type == "ORTHO"
         self.pixel_size, warning = _pixel_size(context.scene)
+        self.raster_offset = _raster_offset(context.scene)
         if warning:
             self.warnings.append(warning)
         self.coordinate_scale, warning = _coordinate_scale(noise, context.object)
@@ -276,6 +291,8 @@ class BakePlan:
         footprint.location = (group_node.location.x - 440, group_node.location.y - 120)
         footprint.inputs["Pixel Size"].default_value = self.pixel_size or 0.0
         footprint.inputs["Orthographic"].default_value = 1.0 if self.orthographic else 0.0
+        footprint.inputs["Raster Offset X"].default_value = self.raster_offset[0]
+        footprint.inputs["Raster Offset Y"].default_value = self.raster_offset[1]
         vector = self.noise.inputs["Vector"]
         if vector.is_linked:
             tree.links.new(vector.links[0].from_socket, noise_filter.inputs["Vector"])
@@ -286,6 +303,8 @@ class BakePlan:
             tree.links.new(coords.outputs["Generated"], noise_filter.inputs["Vector"])
         tree.links.new(footprint.outputs["Minor"], noise_filter.inputs["Minor"])
         tree.links.new(footprint.outputs["Major"], noise_filter.inputs["Major"])
+        for name in ("Axis U", "Axis V", "Centre Offset"):
+            tree.links.new(footprint.outputs[name], noise_filter.inputs[name])
         scale_input = self.noise.inputs["Scale"]
         if scale_input.is_linked:
             tree.links.new(scale_input.links[0].from_socket, noise_filter.inputs["Scale"])
