@@ -5,7 +5,6 @@ ramp, the ramp applied to the filtered mean C(f̄) and Penumbra's node group.
 Writes EXR renders and a JSON of RMSE and times into the folder given after --."""
 
 import json
-import math
 import os
 import sys
 import time
@@ -14,6 +13,8 @@ import bpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "build", "addon"))
+sys.path.insert(0, os.path.join(ROOT, "examples"))
+import colormap_scene  # noqa: E402
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
 
@@ -40,31 +41,7 @@ def build_scene():
     world.use_nodes = True
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     scene.world = world
-    bpy.ops.mesh.primitive_plane_add(size=400.0, location=(0, 190, 0))
-    plane = bpy.context.active_object
-    material = bpy.data.materials.new("noise ramp")
-    material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.remove(tree.nodes["Principled BSDF"])
-    emission = tree.nodes.new("ShaderNodeEmission")
-    tree.links.new(emission.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
-    coords = tree.nodes.new("ShaderNodeTexCoord")
-    noise = tree.nodes.new("ShaderNodeTexNoise")
-    noise.inputs["Scale"].default_value = 2.0
-    noise.inputs["Detail"].default_value = 4.0
-    noise.inputs["Roughness"].default_value = 0.5
-    tree.links.new(coords.outputs["Object"], noise.inputs["Vector"])
-    ramp = tree.nodes.new("ShaderNodeValToRGB")
-    e = ramp.color_ramp.elements
-    e[0].position, e[0].color = 0.47, (0.8, 0.05, 0.02, 1.0)
-    e[1].position, e[1].color = 0.53, (0.02, 0.3, 0.9, 1.0)
-    tree.links.new(noise.outputs["Fac"], ramp.inputs["Fac"])
-    tree.links.new(ramp.outputs["Color"], emission.inputs["Color"])
-    tree.nodes.active = ramp
-    plane.data.materials.append(material)
-    bpy.ops.object.camera_add(location=(0, -2, 1.2), rotation=(math.radians(84), 0, 0))
-    scene.camera = bpy.context.active_object
-    bpy.context.view_layer.objects.active = plane
+    plane, material, ramp, emission, camera = colormap_scene.noise_ramp_plane(roughness=0.5)
     return scene, material, ramp, emission
 
 

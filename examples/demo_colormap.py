@@ -3,14 +3,17 @@ plane receding to the horizon; press "Bake Filtered Colour Map" (the operator
 penumbra.bake_colormap_lut) and render the plain ramp and Penumbra's node
 group at 4 samples per pixel, side by side. run(out_folder) -> dict."""
 
-import math
 import os
+import sys
 import time
 
 import bpy
 import numpy as np
 
 from penumbra import native
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import colormap_scene  # noqa: E402  (examples/colormap_scene.py)
 
 
 def _scene(out_folder):
@@ -24,30 +27,7 @@ def _scene(out_folder):
     scene.render.resolution_percentage = 100
     scene.render.image_settings.file_format = "OPEN_EXR"
     scene.penumbra.colormap.output_folder = out_folder
-    bpy.ops.mesh.primitive_plane_add(size=400.0, location=(0, 190, 0))
-    plane = bpy.context.active_object
-    material = bpy.data.materials.new("noise ramp")
-    material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.remove(tree.nodes["Principled BSDF"])
-    emission = tree.nodes.new("ShaderNodeEmission")
-    tree.links.new(emission.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
-    coords = tree.nodes.new("ShaderNodeTexCoord")
-    noise = tree.nodes.new("ShaderNodeTexNoise")
-    noise.inputs["Scale"].default_value = 2.0
-    noise.inputs["Detail"].default_value = 4.0
-    tree.links.new(coords.outputs["Object"], noise.inputs["Vector"])
-    ramp = tree.nodes.new("ShaderNodeValToRGB")
-    e = ramp.color_ramp.elements
-    e[0].position, e[0].color = 0.47, (0.8, 0.05, 0.02, 1.0)
-    e[1].position, e[1].color = 0.53, (0.02, 0.3, 0.9, 1.0)
-    tree.links.new(noise.outputs["Fac"], ramp.inputs["Fac"])
-    tree.links.new(ramp.outputs["Color"], emission.inputs["Color"])
-    tree.nodes.active = ramp
-    plane.data.materials.append(material)
-    bpy.ops.object.camera_add(location=(0, -2, 1.2), rotation=(math.radians(84), 0, 0))
-    scene.camera = bpy.context.active_object
-    bpy.context.view_layer.objects.active = plane
+    plane, material, ramp, emission, camera = colormap_scene.noise_ramp_plane()
     return scene, material, ramp, emission
 
 

@@ -3,6 +3,7 @@ evaluation against Blender's own, the bake operator end to end, node groups
 in both node-group APIs, bad input, and a tiny Cycles render."""
 
 import os
+import sys
 
 import bpy
 import numpy as np
@@ -10,6 +11,9 @@ import pytest
 
 import penumbra
 from penumbra import native
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "examples"))
+import colormap_scene  # noqa: E402  (the scene users can copy, examples/colormap_scene.py)
 from penumbra.colormap import interface, node_groups
 
 INTERPOLATIONS = ("LINEAR", "EASE", "CARDINAL", "B_SPLINE", "CONSTANT")
@@ -337,7 +341,6 @@ RENDER_W, RENDER_H = 48, 32
 
 
 def _render_scene(scene, pitch_deg, filter_box=False):
-    import math
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.use_denoising = False
@@ -351,31 +354,10 @@ def _render_scene(scene, pitch_deg, filter_box=False):
     if filter_box:  # shade each pixel at its centre
         scene.cycles.pixel_filter_type = "BOX"
         scene.cycles.filter_width = 0.01
-    bpy.ops.mesh.primitive_plane_add(size=600.0, location=(0, 250, 0))
-    plane = bpy.context.active_object
-    material = bpy.data.materials.new("noise ramp")
-    material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.remove(tree.nodes["Principled BSDF"])
-    emission = tree.nodes.new("ShaderNodeEmission")
-    tree.links.new(emission.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
-    coords = tree.nodes.new("ShaderNodeTexCoord")
-    noise = tree.nodes.new("ShaderNodeTexNoise")
-    noise.inputs["Scale"].default_value = 2.0
-    noise.inputs["Detail"].default_value = 4.0
-    tree.links.new(coords.outputs["Object"], noise.inputs["Vector"])
-    ramp = tree.nodes.new("ShaderNodeValToRGB")
-    e = ramp.color_ramp.elements
-    e[0].position, e[0].color = 0.47, (0.8, 0.05, 0.02, 1.0)
-    e[1].position, e[1].color = 0.53, (0.02, 0.3, 0.9, 1.0)
-    tree.links.new(noise.outputs["Fac"], ramp.inputs["Fac"])
-    tree.links.new(ramp.outputs["Color"], emission.inputs["Color"])
-    tree.nodes.active = ramp
-    plane.data.materials.append(material)
-    bpy.ops.object.camera_add(location=(0.2, -2, 1.2), rotation=(math.radians(pitch_deg), 0, math.radians(5)))
-    scene.camera = bpy.context.active_object
-    bpy.context.view_layer.objects.active = plane
-    return material, ramp, emission, scene.camera
+    plane, material, ramp, emission, camera = colormap_scene.noise_ramp_plane(
+        plane_size=600.0, plane_location=(0, 250, 0), camera_location=(0.2, -2, 1.2),
+        camera_rotation_degrees=(pitch_deg, 0, 5))
+    return material, ramp, emission, camera
 
 
 def _render(scene, path, spp, seed):
