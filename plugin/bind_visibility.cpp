@@ -5,8 +5,10 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <array>
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -116,6 +118,78 @@ vis::TriangleMesh mesh_from(const Floats& positions, const Indices& triangles, c
     return m;
 }
 
+vis::SceneBuild scene_build_from(const std::string& s) {
+    if (s == "high") return vis::SceneBuild::High;
+    if (s == "medium") return vis::SceneBuild::Medium;
+    if (s == "low") return vis::SceneBuild::Low;
+    if (s == "refit") return vis::SceneBuild::Refit;
+    throw py::value_error("scene_build must be 'high', 'medium', 'low' or 'refit', got '" + s + "'");
+}
+
+// The frame baker kept between bake_frame calls (a bake is frame after frame
+// of one mesh: the ray set and the Embree scene carry over, the scene is only
+// updated). One process-wide baker, lent to one call at a time; a call that
+// finds it busy (another thread baking) or made for other settings uses a
+// fresh one. Taken with the GIL released; the mutex is never held while
+// Python runs.
+struct BakerLoan {
+    std::unique_lock<std::mutex> lock;
+    vis::FrameBaker* baker = nullptr;
+    std::unique_ptr<vis::FrameBaker> own;
+};
+// Never destroyed at exit (an Embree scene released during static
+// destruction could outlive Embree); release_baker() frees it after a bake.
+std::mutex& baker_mutex() {
+    static auto* mutex = new std::mutex;
+    return *mutex;
+}
+std::unique_ptr<vis::FrameBaker>& kept_baker() {
+    static auto* kept = new std::unique_ptr<vis::FrameBaker>;
+    return *kept;
+}
+void release_baker() {
+    std::lock_guard<std::mutex> lock(baker_mutex());
+    kept_baker().reset();
+}
+BakerLoan borrow_baker(const vis::BakeSettings& settings, vis::SceneBuild build) {
+    std::mutex& mutex = baker_mutex();
+    std::unique_ptr<vis::FrameBaker>& kept = kept_baker();
+    BakerLoan loan;
+    loan.lock = std::unique_lock<std::mutex>(mutex, std::try_to_lock);
+    if (!loan.lock.owns_lock()) {
+        loan.own = std::make_unique<vis::FrameBaker>(settings, build);
+        loan.baker = loan.own.get();
+        return loan;
+    }
+    const auto same = [&](const vis::BakeSettings& a) {
+        return a.order == settings.order && a.rays == settings.rays && a.below_horizon == settings.below_horizon &&
+               a.weighting == settings.weighting && a.offset_scale == settings.offset_scale;
+    };
+    if (!kept || !same(kept->settings()) || kept->scene_build() != build) {
+        kept.reset();
+        kept = std::make_unique<vis::FrameBaker>(settings, build);
+    }
+    kept->set_threads(settings.threads);
+    loan.baker = kept.get();
+    return loan;
+}
+
+// One PoseShader per SH order for the whole process: building one costs
+// microseconds at order 4 and ~0.2 ms at order 8, and it caches the Phong
+// operators of the exponents it has seen. PoseShader::shade is thread-safe,
+// so the shared instance may serve concurrent calls. Taken with the GIL
+// released: the mutex is only held to look up or build the shader, never
+// while Python runs.
+std::shared_ptr<const sh::PoseShader> shader_for(int order) {
+    static std::mutex mutex;
+    static std::array<std::shared_ptr<const sh::PoseShader>, 9> shaders;
+    if (order < 1 || order > 8) throw penumbra::ArgumentError("SH order must be in [1, 8]");
+    std::lock_guard<std::mutex> lock(mutex);
+    auto& slot = shaders[std::size_t(order)];
+    if (!slot) slot = std::make_shared<const sh::PoseShader>(order);
+    return slot;
+}
+
 py::dict summary_dict(const vis::PoseModel& m) {
     py::dict d;
     for (const auto& [k, v] : m.summary) d[py::str(k)] = v;
@@ -173,6 +247,11 @@ void bind_visibility(py::module_& m) {
     }, py::arg("vertex_count"), py::arg("polygon_sizes"), py::arg("polygon_vertices"),
        "FNV-1a 64 fingerprint of the polygon topology, stored in model files.");
 
+    m.def("visibility_release_bake_cache", [] {
+        py::gil_scoped_release release;
+        release_baker();
+    }, "Frees the Embree scene kept between bake_frame calls (the add-on calls it when a bake ends).");
+
     // Training sets ------------------------------------------------------------
     py::class_<vis::TrainingSet>(m, "VisibilityTrainingSet",
         "Baked visibility of a deforming mesh, frame by frame, with the pose of each frame. Bake pieces in "
@@ -197,7 +276,8 @@ void bind_visibility(py::module_& m) {
         .def("bake_frame", [](vis::TrainingSet& s, double frame, const Floats& positions, const Floats& normals,
                               const Indices& triangles, const Indices& neighbours, const Floats& bone_rotations,
                               const std::vector<std::pair<Floats, Indices>>& occluders, int threads,
-                              py::object progress) {
+                              py::object progress, const std::string& scene_build) {
+            const vis::SceneBuild build = scene_build_from(scene_build);
             vis::FrameGeometry g;
             g.mesh = mesh_from(positions, triangles, "mesh");
             g.normals = triples(normals, "normals");
@@ -217,7 +297,8 @@ void bind_visibility(py::module_& m) {
             vis::FrameBakeStats stats;
             try {
                 py::gil_scoped_release release;
-                vis::bake_frame(g, nb, settings, f.visibility.data(), py_progress.progress(), &stats);
+                BakerLoan loan = borrow_baker(settings, build);
+                loan.baker->bake(g, nb, f.visibility.data(), py_progress.progress(), &stats);
             } catch (const penumbra::Cancelled&) {
                 py_progress.rethrow_if_failed();
                 throw;
@@ -229,10 +310,14 @@ void bind_visibility(py::module_& m) {
             d["rays_counted"] = stats.rays_counted;
             d["repaired_normals"] = stats.frames.repaired_normals;
             d["fallback_tangents"] = stats.frames.fallback_tangents;
+            d["seconds_setup"] = stats.seconds_setup;
+            d["seconds_build"] = stats.seconds_build;
+            d["seconds_cast"] = stats.seconds_cast;
+            d["scene_updated"] = stats.scene_updated;
             return d;
         }, py::arg("frame"), py::arg("positions"), py::arg("normals"), py::arg("triangles"), py::arg("neighbours"),
            py::arg("bone_rotations"), py::arg("occluders") = std::vector<std::pair<Floats, Indices>>{},
-           py::arg("threads") = 0, py::arg("progress") = py::none(),
+           py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("scene_build") = "medium",
            "Bakes one frame (world-space positions, normals, triangles; occluders as (positions, triangles) pairs) "
            "and appends it. Returns ray counts. Releases the GIL; progress(fraction) -> False cancels.")
         .def("save", [](const vis::TrainingSet& s, const std::string& path) {
@@ -313,8 +398,7 @@ void bind_visibility(py::module_& m) {
             std::vector<float> params(V * x.params_per_vertex()), axes(V * x.lobes * 3), bands(V * x.lobes * x.order);
             {
                 py::gil_scoped_release release;
-                vis::synthesize_params(x, r.data(), params.data(), threads);
-                vis::params_to_lobes(x.order, x.lobes, V, params.data(), axes.data(), bands.data());
+                vis::synthesize_lobes(x, r.data(), params.data(), axes.data(), bands.data(), threads);
             }
             return py::make_tuple(to_array(axes, {py::ssize_t(V), x.lobes, 3}),
                                   to_array(bands, {py::ssize_t(V), x.lobes, x.order}),
@@ -358,8 +442,8 @@ void bind_visibility(py::module_& m) {
             vis::RuntimeResult result;
             {
                 py::gil_scoped_release release;
-                const sh::PoseShader shader(x.order);
-                result = vis::shade_pose(x, shader, r.data(), p, n, t, nb, l, sp);
+                const auto shader = shader_for(x.order);
+                result = vis::shade_pose(x, *shader, r.data(), p, n, t, nb, l, sp);
             }
             py::dict info;
             info["seconds_pose_to_lobes"] = result.timings.pose_to_lobes;
@@ -419,6 +503,7 @@ void bind_visibility(py::module_& m) {
         r["zh_fit"] = errors_dict(report.zh_fit);
         r["model_training"] = errors_dict(report.model_training);
         r["model_holdout"] = errors_dict(report.model_holdout);
+        r["model_holdout_unpruned"] = errors_dict(report.model_holdout_unpruned);
         r["ridge_relative"] = report.ridge_relative;
         r["ridge_curve"] = report.ridge_curve;
         r["constant_vertices"] = report.constant_vertices;

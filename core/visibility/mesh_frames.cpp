@@ -1,12 +1,14 @@
 #include "visibility/mesh_frames.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 
 #include <Eigen/Geometry>
 
 #include "common/error.hpp"
+#include "visibility/parallel.hpp"
 
 namespace penumbra::visibility {
 
@@ -69,7 +71,7 @@ void basis_from_normal(const Eigen::Vector3d& n, Eigen::Vector3d& t, Eigen::Vect
 
 void vertex_frames(const std::vector<float>& positions, const std::vector<float>& normals,
                    const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>& neighbours,
-                   float* frames_out, FrameStats* stats) {
+                   float* frames_out, FrameStats* stats, int threads) {
     const std::size_t n_vertices = positions.size() / 3;
     if (positions.size() % 3 != 0 || normals.size() != positions.size())
         throw ArgumentError("positions and normals must both be (V, 3) with the same V");
@@ -101,28 +103,34 @@ void vertex_frames(const std::vector<float>& positions, const std::vector<float>
         }
         local.repaired_normals = broken.size();
     }
-    for (std::size_t v = 0; v < n_vertices; ++v) {
-        const Eigen::Vector3d& n = normal[v];
-        Eigen::Vector3d t = vec(positions, neighbours[v]) - vec(positions, v);
-        t -= n * n.dot(t);
-        Eigen::Vector3d b;
-        const double length = t.norm();
-        const double edge = (vec(positions, neighbours[v]) - vec(positions, v)).norm();
-        // An edge within ~0.06° of the normal gives no usable direction.
-        if (neighbours[v] != v && length > 1e-3 * edge && std::isfinite(length)) {
-            t /= length;
-            b = n.cross(t);
-        } else {
-            basis_from_normal(n, t, b);
-            ++local.fallback_tangents;
+    std::atomic<std::size_t> fallback{0};
+    parallel_chunks(n_vertices, 16384, threads, [&](std::size_t begin, std::size_t end) {
+        std::size_t fallbacks = 0;
+        for (std::size_t v = begin; v < end; ++v) {
+            const Eigen::Vector3d& n = normal[v];
+            Eigen::Vector3d t = vec(positions, neighbours[v]) - vec(positions, v);
+            t -= n * n.dot(t);
+            Eigen::Vector3d b;
+            const double length = t.norm();
+            const double edge = (vec(positions, neighbours[v]) - vec(positions, v)).norm();
+            // An edge within ~0.06° of the normal gives no usable direction.
+            if (neighbours[v] != v && length > 1e-3 * edge && std::isfinite(length)) {
+                t /= length;
+                b = n.cross(t);
+            } else {
+                basis_from_normal(n, t, b);
+                ++fallbacks;
+            }
+            float* out = frames_out + 9 * v;
+            for (int k = 0; k < 3; ++k) {
+                out[k] = float(t[k]);
+                out[3 + k] = float(b[k]);
+                out[6 + k] = float(n[k]);
+            }
         }
-        float* out = frames_out + 9 * v;
-        for (int k = 0; k < 3; ++k) {
-            out[k] = float(t[k]);
-            out[3 + k] = float(b[k]);
-            out[6 + k] = float(n[k]);
-        }
-    }
+        fallback += fallbacks;
+    }, Progress{});
+    local.fallback_tangents = fallback.load();
     if (stats) *stats = local;
 }
 

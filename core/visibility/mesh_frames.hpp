@@ -38,9 +38,11 @@ struct FrameStats {
 // transposed: world = t·x + b·y + n·z). A zero-length or non-finite normal is
 // replaced by the area-weighted normal of the vertex's triangles, and if that
 // is zero too, by +z; such vertices are counted.
+// threads: worker threads for the per-vertex pass (0: every core); the result
+// does not depend on it.
 void vertex_frames(const std::vector<float>& positions, const std::vector<float>& normals,
                    const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>& neighbours,
-                   float* frames_out, FrameStats* stats = nullptr);
+                   float* frames_out, FrameStats* stats = nullptr, int threads = 1);
 
 // Duff et al. 2017, "Building an Orthonormal Basis, Revisited": t, b from n.
 void basis_from_normal(const Eigen::Vector3d& n, Eigen::Vector3d& t, Eigen::Vector3d& b);

@@ -14,14 +14,32 @@ struct OcclusionScene::Impl {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
     int width = 1;
+    SceneBuild build = SceneBuild::Medium;
+    struct Part {
+        RTCGeometry geometry = nullptr;
+        float* vertices = nullptr;
+        std::size_t vertex_count = 0;
+        std::vector<std::uint32_t> triangles;
+    };
+    std::vector<Part> parts;       // one per mesh given, empty ones included (geometry null)
 
     ~Impl() {
+        for (auto& p : parts)
+            if (p.geometry) rtcReleaseGeometry(p.geometry);
         if (scene) rtcReleaseScene(scene);
         if (device) rtcReleaseDevice(device);
     }
 };
 
 namespace {
+
+// The process-wide device, created once (thread-safe static initialization)
+// and never released: releasing it at exit could race Embree's own teardown.
+// Each scene holds a reference of its own.
+RTCDevice shared_device() {
+    static RTCDevice device = rtcNewDevice(nullptr);
+    return device;
+}
 
 void check_device(RTCDevice device, const char* what) {
     const RTCError code = rtcGetDeviceError(device);
@@ -44,10 +62,13 @@ void validate(const TriangleMesh& mesh, std::size_t index) {
 
 }  // namespace
 
-OcclusionScene::OcclusionScene(const std::vector<const TriangleMesh*>& meshes) : impl_(std::make_unique<Impl>()) {
+OcclusionScene::OcclusionScene(const std::vector<const TriangleMesh*>& meshes, SceneBuild build)
+    : impl_(std::make_unique<Impl>()) {
     for (std::size_t k = 0; k < meshes.size(); ++k) validate(*meshes[k], k);
-    impl_->device = rtcNewDevice(nullptr);
+    impl_->device = shared_device();
     if (!impl_->device) throw Error("Embree could not create a device (rtcNewDevice failed)");
+    rtcRetainDevice(impl_->device);
+    impl_->build = build;
     if (rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED))
         impl_->width = 16;
     else if (rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED))
@@ -55,13 +76,28 @@ OcclusionScene::OcclusionScene(const std::vector<const TriangleMesh*>& meshes) :
     else if (rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED))
         impl_->width = 4;
     impl_->scene = rtcNewScene(impl_->device);
+    if (!impl_->scene) {
+        check_device(impl_->device, "creating a scene");
+        throw Error("Embree could not create a scene");
+    }
     // Robust traversal: rays start a hair above the surface, where a
     // non-robust test can slip between two triangles of a crease.
-    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
-    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+    rtcSetSceneFlags(impl_->scene, build == SceneBuild::Low ? RTCSceneFlags(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC)
+                                                            : RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(impl_->scene, build == SceneBuild::High  ? RTC_BUILD_QUALITY_HIGH
+                                          : build == SceneBuild::Low ? RTC_BUILD_QUALITY_LOW
+                                                                     : RTC_BUILD_QUALITY_MEDIUM);
     for (const TriangleMesh* mesh : meshes) {
-        if (mesh->triangle_count() == 0) continue;
+        Impl::Part part;
+        part.vertex_count = mesh->vertex_count();
+        part.triangles = mesh->triangles;
+        if (mesh->triangle_count() == 0) {
+            impl_->parts.push_back(std::move(part));
+            continue;
+        }
         RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        if (build == SceneBuild::Refit) rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_REFIT);
+        else if (build == SceneBuild::Low) rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_LOW);
         // Embree reads vertices with 16-byte loads: one float of padding at the end.
         auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
             geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh->vertex_count() + 1));
@@ -77,10 +113,30 @@ OcclusionScene::OcclusionScene(const std::vector<const TriangleMesh*>& meshes) :
         std::copy(mesh->triangles.begin(), mesh->triangles.end(), indices);
         rtcCommitGeometry(geometry);
         rtcAttachGeometry(impl_->scene, geometry);
-        rtcReleaseGeometry(geometry);
+        part.geometry = geometry;  // the scene holds a reference too; ours is released in ~Impl
+        part.vertices = vertices;
+        impl_->parts.push_back(std::move(part));
     }
     rtcCommitScene(impl_->scene);
     check_device(impl_->device, "building the scene");
+}
+
+bool OcclusionScene::update_positions(const std::vector<const TriangleMesh*>& meshes) {
+    if (meshes.size() != impl_->parts.size()) return false;
+    for (std::size_t k = 0; k < meshes.size(); ++k)
+        if (meshes[k]->vertex_count() != impl_->parts[k].vertex_count || meshes[k]->triangles != impl_->parts[k].triangles)
+            return false;
+    for (std::size_t k = 0; k < meshes.size(); ++k) validate(*meshes[k], k);
+    for (std::size_t k = 0; k < meshes.size(); ++k) {
+        Impl::Part& part = impl_->parts[k];
+        if (!part.geometry) continue;
+        std::copy(meshes[k]->positions.begin(), meshes[k]->positions.end(), part.vertices);
+        rtcUpdateGeometryBuffer(part.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+        rtcCommitGeometry(part.geometry);
+    }
+    rtcCommitScene(impl_->scene);
+    check_device(impl_->device, "updating the scene");
+    return true;
 }
 
 OcclusionScene::~OcclusionScene() = default;

@@ -21,13 +21,23 @@ struct TriangleMesh {
     std::size_t triangle_count() const { return triangles.size() / 3; }
 };
 
-// An Embree device and committed scene. Thread-safe for queries once built.
+// How the scene's BVH is built. High: spatial splits (slowest build, fastest
+// rays on a static scene); Medium: Embree's default; Low with the dynamic
+// scene flag: fastest rebuild, meant for scenes rebuilt every frame; Refit:
+// the first frame is built at Medium quality, later frames (update_positions)
+// only refit its bounds (cheapest update, rays slow down as the pose moves
+// away from the first frame). Measured in docs/visibility-benchmark.md.
+enum class SceneBuild : std::uint32_t { High = 0, Medium = 1, Low = 2, Refit = 3 };
+
+// A committed Embree scene on the process-wide device (created on first use
+// and kept: creating a device starts Embree's threads, milliseconds each
+// time). Thread-safe for queries once built.
 // Triangles whose indices fall outside the vertex array, or with a
 // non-finite vertex, throw penumbra::ArgumentError; zero-area triangles are
 // kept (Embree never reports a hit on them).
 class OcclusionScene {
 public:
-    explicit OcclusionScene(const std::vector<const TriangleMesh*>& meshes);
+    explicit OcclusionScene(const std::vector<const TriangleMesh*>& meshes, SceneBuild build = SceneBuild::Medium);
     ~OcclusionScene();
     OcclusionScene(const OcclusionScene&) = delete;
     OcclusionScene& operator=(const OcclusionScene&) = delete;
@@ -41,6 +51,13 @@ public:
     // (docs/visibility-benchmark.md).
     void occluded_bundle(const Eigen::Vector3f& origin, const Eigen::Vector3f* directions, int count,
                          float t_near, float t_far, std::uint8_t* occluded, bool use_packets = false) const;
+
+    // The next frame of the same meshes: when their number, vertex counts and
+    // triangles equal the scene's, copies the new positions into the
+    // existing buffers and recommits (rebuild, or refit for SceneBuild::
+    // Refit) and returns true; otherwise changes nothing and returns false.
+    // Validates like the constructor. Not thread-safe with queries.
+    bool update_positions(const std::vector<const TriangleMesh*>& meshes);
 
     // The packet width occluded_bundle uses with use_packets (16, 8, 4 or 1).
     int packet_width() const;

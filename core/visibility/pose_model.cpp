@@ -300,7 +300,99 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
         return total.result();
     };
 
-    // Choose λ on the held-out frames.
+    // Per vertex: constant, or the joints that matter. `rows` are the frames
+    // the solver was fitted on; W its ridge weights (k × V·d). Returns the
+    // stored form (bias with the feature means folded in, kept joints) and
+    // adds the pruned model's errors on `rows` to `errors`.
+    struct Pruned {
+        std::vector<std::vector<std::uint16_t>> kept;
+        std::vector<float> bias;
+    };
+    const std::size_t n_active = active.size();
+    auto prune = [&](const std::vector<std::size_t>& rows, const Solver& sol, const Eigen::MatrixXf& W,
+                     ErrorSums& errors, const Progress& prune_progress, double from, double to) {
+        const std::size_t R = rows.size();
+        Pruned out;
+        out.kept.resize(V);
+        out.bias.assign(V * d, 0.0f);
+        Eigen::MatrixXd Ac(R, k);
+        for (std::size_t r = 0; r < R; ++r) Ac.row(r) = A.row(rows[r]);
+        if (k) Ac.rowwise() -= sol.feature_mean.transpose();
+        parallel_chunks(V, 64, settings.threads, [&](std::size_t begin, std::size_t end) {
+            ErrorSums local;
+            Eigen::MatrixXd dropped(R, d), trial(R, d), prediction(R, d);
+            std::vector<Eigen::MatrixXd> parts(n_active);
+            std::vector<std::pair<double, std::size_t>> norms(n_active);
+            std::vector<double> params(d), sh(n_sh);
+            for (std::size_t v = begin; v < end; ++v) {
+                const Eigen::RowVectorXd mean = sol.b_mean.segment(v * d, d).cast<double>();
+                double variation = 0.0;
+                for (std::size_t r = 0; r < R; ++r)
+                    for (int i = 0; i < d; ++i) variation += std::pow(double(B(rows[r], v * d + i)) - mean[i], 2);
+                variation = std::sqrt(variation / double(R * d));
+                std::vector<std::uint16_t>& keep = out.kept[v];
+                prediction = mean.replicate(R, 1);
+                if (k && variation > settings.constant_tolerance) {
+                    const Eigen::MatrixXd Wv = W.middleCols(v * d, d).cast<double>();
+                    for (std::size_t j = 0; j < n_active; ++j) {
+                        parts[j] = Ac.middleCols(j * fpj, fpj) * Wv.middleRows(j * fpj, fpj);
+                        norms[j] = {parts[j].squaredNorm(), j};
+                    }
+                    std::sort(norms.begin(), norms.end());
+                    dropped.setZero();
+                    std::size_t first_kept = 0;
+                    for (; first_kept < n_active; ++first_kept) {
+                        trial = dropped + parts[norms[first_kept].second];
+                        if (std::sqrt(trial.squaredNorm() / double(R * d)) > settings.prune_tolerance) break;
+                        dropped = trial;
+                    }
+                    for (std::size_t e = first_kept; e < n_active; ++e) keep.push_back(std::uint16_t(norms[e].second));
+                    std::sort(keep.begin(), keep.end());
+                    for (auto j : keep) prediction += parts[j];
+                }
+                // Bias with the feature means folded in: params = bias + Σ φ_j W_j.
+                Eigen::RowVectorXd bias = mean;
+                for (auto j : keep)
+                    bias -= sol.feature_mean.segment(j * fpj, fpj).transpose() *
+                            W.block(j * fpj, v * d, fpj, d).cast<double>();
+                for (int i = 0; i < d; ++i) out.bias[v * d + i] = float(bias[i]);
+                for (std::size_t r = 0; r < R; ++r) {
+                    for (int i = 0; i < d; ++i) params[i] = prediction(r, i);
+                    lobes_to_sh(order, lobes, params.data(), sh.data());
+                    local.add(order, sh.data(), set.frames[rows[r]].visibility.data() + v * n_sh);
+                }
+            }
+            std::lock_guard<std::mutex> lock(merge_mutex);
+            errors.merge(local);
+        }, prune_progress, from, to);
+        return out;
+    };
+    // Errors of a pruned model (as stored) on frames it was not fitted on.
+    auto pruned_errors = [&](const Pruned& pruned, const Eigen::MatrixXf& W, const std::vector<std::size_t>& rows) {
+        ErrorSums total;
+        parallel_chunks(V, 256, settings.threads, [&](std::size_t begin, std::size_t end) {
+            ErrorSums local;
+            std::vector<double> params(d), sh(n_sh);
+            for (std::size_t v = begin; v < end; ++v)
+                for (std::size_t r : rows) {
+                    for (int i = 0; i < d; ++i) params[i] = pruned.bias[v * d + i];
+                    for (auto j : pruned.kept[v])
+                        for (int a = 0; a < fpj; ++a) {
+                            const double phi = A(r, j * fpj + a);
+                            for (int i = 0; i < d; ++i) params[i] += phi * W(j * fpj + a, v * d + i);
+                        }
+                    lobes_to_sh(order, lobes, params.data(), sh.data());
+                    local.add(order, sh.data(), set.frames[r].visibility.data() + v * n_sh);
+                }
+            std::lock_guard<std::mutex> lock(merge_mutex);
+            total.merge(local);
+        }, Progress{});
+        return total.result();
+    };
+
+    // Choose λ on the held-out frames, then measure the model exactly as it
+    // is stored (ridge, constant vertices, per-vertex joint pruning), fitted
+    // without the held-out frames, on them.
     double rho = 1e-4;
     if (!holdout.empty()) {
         const Solver sol = make_solver(train);
@@ -317,10 +409,15 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
             if (e.sh_rms < best) {
                 best = e.sh_rms;
                 rho = grid[g];
-                report.model_holdout = e;
+                report.model_holdout_unpruned = e;
             }
-            progress.report(0.8 + 0.1 * double(g + 1) / double(grid.size()));
+            progress.report(0.8 + 0.05 * double(g + 1) / double(grid.size()));
         }
+        Eigen::MatrixXf W_train;
+        if (k) W_train = (sol.V * shrink(sol, rho).asDiagonal()).cast<float>() * sol.ut_b;
+        ErrorSums ignored;
+        const Pruned pruned_train = prune(train, sol, W_train, ignored, progress, 0.85, 0.9);
+        report.model_holdout = pruned_errors(pruned_train, W_train, holdout);
     }
     report.ridge_relative = rho;
 
@@ -330,62 +427,12 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
     const Solver sol = make_solver(all);
     Eigen::MatrixXf W;
     if (k) W = (sol.V * shrink(sol, rho).asDiagonal()).cast<float>() * sol.ut_b;
-    Eigen::MatrixXd Ac = A;
-    if (k) Ac.rowwise() -= sol.feature_mean.transpose();
 
-    // Per vertex: constant, or the joints that matter.
-    std::vector<std::vector<std::uint16_t>> kept(V);
     PoseModel model;
-    model.bias.assign(V * d, 0.0f);
     ErrorSums train_errors;
-    const std::size_t n_active = active.size();
-    parallel_chunks(V, 64, settings.threads, [&](std::size_t begin, std::size_t end) {
-        ErrorSums local;
-        Eigen::MatrixXd contrib(F, d), dropped(F, d), trial(F, d), prediction(F, d);
-        std::vector<Eigen::MatrixXd> parts(n_active);
-        std::vector<std::pair<double, std::size_t>> norms(n_active);
-        std::vector<double> params(d), sh(n_sh);
-        for (std::size_t v = begin; v < end; ++v) {
-            const Eigen::RowVectorXd mean = sol.b_mean.segment(v * d, d).cast<double>();
-            double variation = 0.0;
-            for (std::size_t f = 0; f < F; ++f)
-                for (int i = 0; i < d; ++i) variation += std::pow(double(B(f, v * d + i)) - mean[i], 2);
-            variation = std::sqrt(variation / double(F * d));
-            std::vector<std::uint16_t>& keep = kept[v];
-            prediction = mean.replicate(F, 1);
-            if (k && variation > settings.constant_tolerance) {
-                const Eigen::MatrixXd Wv = W.middleCols(v * d, d).cast<double>();
-                for (std::size_t j = 0; j < n_active; ++j) {
-                    parts[j] = Ac.middleCols(j * fpj, fpj) * Wv.middleRows(j * fpj, fpj);
-                    norms[j] = {parts[j].squaredNorm(), j};
-                }
-                std::sort(norms.begin(), norms.end());
-                dropped.setZero();
-                std::size_t first_kept = 0;
-                for (; first_kept < n_active; ++first_kept) {
-                    trial = dropped + parts[norms[first_kept].second];
-                    if (std::sqrt(trial.squaredNorm() / double(F * d)) > settings.prune_tolerance) break;
-                    dropped = trial;
-                }
-                for (std::size_t e = first_kept; e < n_active; ++e) keep.push_back(std::uint16_t(norms[e].second));
-                std::sort(keep.begin(), keep.end());
-                for (auto j : keep) prediction += parts[j];
-            }
-            // Bias with the feature means folded in: params = bias + Σ φ_j W_j.
-            Eigen::RowVectorXd bias = mean;
-            for (auto j : keep)
-                bias -= sol.feature_mean.segment(j * fpj, fpj).transpose() *
-                        W.block(j * fpj, v * d, fpj, d).cast<double>();
-            for (int i = 0; i < d; ++i) model.bias[v * d + i] = float(bias[i]);
-            for (std::size_t f = 0; f < F; ++f) {
-                for (int i = 0; i < d; ++i) params[i] = prediction(f, i);
-                lobes_to_sh(order, lobes, params.data(), sh.data());
-                local.add(order, sh.data(), set.frames[f].visibility.data() + v * n_sh);
-            }
-        }
-        std::lock_guard<std::mutex> lock(merge_mutex);
-        train_errors.merge(local);
-    }, progress, 0.9, 1.0);
+    Pruned pruned = prune(all, sol, W, train_errors, progress, 0.9, 1.0);
+    std::vector<std::vector<std::uint16_t>>& kept = pruned.kept;
+    model.bias = std::move(pruned.bias);
     report.model_training = train_errors.result();
 
     model.order = order;
@@ -415,7 +462,7 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
     report.model_bytes = 4 * model.joint_offsets.size() + 2 * model.joint_index.size() + 4 * model.bias.size() +
                          4 * model.weights.size();
     report.dense_bytes = 4 * std::size_t(d) * (k + 1) * V;
-    if (report.holdout_frames == 0) report.model_holdout = Errors{};
+    if (report.holdout_frames == 0) report.model_holdout = report.model_holdout_unpruned = Errors{};
 
     model.summary = {
         {"frames", double(F)},
@@ -428,6 +475,8 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
         {"holdout_sh_rms", report.model_holdout.sh_rms},
         {"holdout_ao_mean_abs", report.model_holdout.ao_mean_abs},
         {"holdout_ao_max_abs", report.model_holdout.ao_max_abs},
+        {"holdout_unpruned_sh_rms", report.model_holdout_unpruned.sh_rms},
+        {"holdout_unpruned_ao_mean_abs", report.model_holdout_unpruned.ao_mean_abs},
         {"ridge_relative", rho},
         {"constant_vertices", double(report.constant_vertices)},
         {"stored_joint_blocks", double(report.stored_joint_blocks)},
@@ -441,6 +490,11 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
 }
 
 void synthesize_params(const PoseModel& model, const float* joint_rotations, float* params_out, int threads) {
+    synthesize_lobes(model, joint_rotations, params_out, nullptr, nullptr, threads);
+}
+
+void synthesize_lobes(const PoseModel& model, const float* joint_rotations, float* params_out, float* axes_out,
+                      float* bands_out, int threads) {
     const int d = model.params_per_vertex(), fpj = features_per_joint(model.features);
     std::vector<double> phi(model.joints.size() * fpj);
     for (std::size_t j = 0; j < model.joints.size(); ++j) {
@@ -449,18 +503,27 @@ void synthesize_params(const PoseModel& model, const float* joint_rotations, flo
                 throw ArgumentError("joint rotation of '" + model.joints[j] + "' is not finite");
         joint_features(model.features, joint_rotations + 9 * j, phi.data() + j * fpj);
     }
-    parallel_chunks(model.vertex_count, 1024, threads, [&](std::size_t begin, std::size_t end) {
-        std::vector<double> acc(d);
+    // Single precision, like the stored weights and the output: at most a few
+    // dozen products per parameter, and the loop vectorizes.
+    const std::vector<float> phi_f(phi.begin(), phi.end());
+    parallel_chunks(model.vertex_count, 2048, threads, [&](std::size_t begin, std::size_t end) {
         for (std::size_t v = begin; v < end; ++v) {
-            for (int i = 0; i < d; ++i) acc[i] = model.bias[v * d + i];
+            float* acc = params_out + v * d;
+            const float* bias = model.bias.data() + v * d;
+            for (int i = 0; i < d; ++i) acc[i] = bias[i];
             for (std::uint32_t e = model.joint_offsets[v]; e < model.joint_offsets[v + 1]; ++e) {
-                const double* f = phi.data() + std::size_t(model.joint_index[e]) * fpj;
+                const float* f = phi_f.data() + std::size_t(model.joint_index[e]) * fpj;
                 const float* w = model.weights.data() + std::size_t(e) * fpj * d;
-                for (int a = 0; a < fpj; ++a)
-                    for (int i = 0; i < d; ++i) acc[i] += f[a] * w[a * d + i];
+                for (int a = 0; a < fpj; ++a) {
+                    const float fa = f[a];
+                    const float* wa = w + a * d;
+                    for (int i = 0; i < d; ++i) acc[i] += fa * wa[i];
+                }
             }
-            for (int i = 0; i < d; ++i) params_out[v * d + i] = float(acc[i]);
         }
+        if (axes_out && bands_out)
+            params_to_lobes(model.order, model.lobes, end - begin, params_out + begin * d,
+                            axes_out + begin * model.lobes * 3, bands_out + begin * model.lobes * model.order);
     }, Progress{});
 }
 

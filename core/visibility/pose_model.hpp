@@ -102,7 +102,11 @@ struct FitReport {
     std::size_t training_frames = 0, holdout_frames = 0;
     Errors zh_fit;            // ZH lobes vs baked SH, every frame
     Errors model_training;    // final (pruned) model vs baked SH, every frame
-    Errors model_holdout;     // model fitted without the held-out frames vs them (λ chosen on them too)
+    // The model as stored (ridge, constant vertices, per-vertex joint
+    // pruning), fitted without the held-out frames, against them (λ chosen
+    // on them too). This is the held-out error of the saved model's recipe.
+    Errors model_holdout;
+    Errors model_holdout_unpruned;  // the same before pruning (the plain ridge solution)
     double ridge_relative = 0.0;                          // ρ: λ = ρ·s_max²
     std::vector<std::pair<double, double>> ridge_curve;   // (ρ, held-out sh_rms)
     std::size_t constant_vertices = 0;
@@ -143,6 +147,10 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
 // Run time (§4.3 step 1): joint_rotations is joints × 9 (row-major, in
 // model.joints order); writes vertex_count × d lobe parameters.
 void synthesize_params(const PoseModel& model, const float* joint_rotations, float* params_out, int threads = 0);
+
+// synthesize_params and params_to_lobes in one parallel pass (the run time).
+void synthesize_lobes(const PoseModel& model, const float* joint_rotations, float* params_out, float* axes_out,
+                      float* bands_out, int threads = 0);
 
 // Lobe parameters → axes in the local frame (V × lobes × 3) and zonal bands
 // (V × lobes × order), ready for Eq. 1.

@@ -25,13 +25,12 @@ RuntimeResult shade_pose(const PoseModel& model, const sh::PoseShader& shader, c
     // §4.3 step 1: ZH lobes from the pose.
     auto t0 = Clock::now();
     std::vector<float> params(V * d), axes(V * model.lobes * 3), bands(V * model.lobes * model.order);
-    synthesize_params(model, joint_rotations, params.data(), parameters.threads);
-    params_to_lobes(model.order, model.lobes, V, params.data(), axes.data(), bands.data());
+    synthesize_lobes(model, joint_rotations, params.data(), axes.data(), bands.data(), parameters.threads);
     auto t1 = Clock::now();
 
     // The frames the lobes live in, from the deformed mesh.
     std::vector<float> frames(9 * V), tangent(3 * V), normal(3 * V);
-    vertex_frames(positions, normals, triangles, neighbours, frames.data(), &result.frame_stats);
+    vertex_frames(positions, normals, triangles, neighbours, frames.data(), &result.frame_stats, parameters.threads);
     for (std::size_t v = 0; v < V; ++v)
         for (int k = 0; k < 3; ++k) {
             tangent[3 * v + k] = frames[9 * v + k];

@@ -1,6 +1,7 @@
 #include "visibility/visibility_bake.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -48,10 +49,32 @@ RaySet make_ray_set(const BakeSettings& settings) {
     return set;
 }
 
+FrameBaker::FrameBaker(const BakeSettings& settings, SceneBuild build)
+    : settings_(settings), build_(build), rays_(std::make_unique<RaySet>(make_ray_set(settings))) {
+    if (build != SceneBuild::High && build != SceneBuild::Medium && build != SceneBuild::Low && build != SceneBuild::Refit)
+        throw ArgumentError("unknown scene build");
+}
+
+FrameBaker::~FrameBaker() = default;
+
+void FrameBaker::set_threads(int threads) {
+    if (threads < 0) throw ArgumentError("threads must be >= 0 (0: every core)");
+    settings_.threads = threads;
+}
+
 void bake_frame(const FrameGeometry& geometry, const std::vector<std::uint32_t>& neighbours,
                 const BakeSettings& settings, float* visibility_out, const Progress& progress, FrameBakeStats* stats,
                 double progress_from, double progress_to) {
-    const RaySet rays = make_ray_set(settings);
+    FrameBaker(settings).bake(geometry, neighbours, visibility_out, progress, stats, progress_from, progress_to);
+}
+
+void FrameBaker::bake(const FrameGeometry& geometry, const std::vector<std::uint32_t>& neighbours,
+                      float* visibility_out, const Progress& progress, FrameBakeStats* stats, double progress_from,
+                      double progress_to) {
+    using Clock = std::chrono::steady_clock;
+    const auto t_setup = Clock::now();
+    const BakeSettings& settings = settings_;
+    const RaySet& rays = *rays_;
     const TriangleMesh& mesh = geometry.mesh;
     const std::size_t n_vertices = mesh.vertex_count();
     if (geometry.normals.size() != mesh.positions.size())
@@ -61,11 +84,20 @@ void bake_frame(const FrameGeometry& geometry, const std::vector<std::uint32_t>&
 
     FrameBakeStats local;
     std::vector<float> frames(9 * n_vertices);
-    vertex_frames(mesh.positions, geometry.normals, mesh.triangles, neighbours, frames.data(), &local.frames);
+    vertex_frames(mesh.positions, geometry.normals, mesh.triangles, neighbours, frames.data(), &local.frames,
+                  settings.threads);
 
     std::vector<const TriangleMesh*> meshes{&mesh};
     for (const auto& o : geometry.occluders) meshes.push_back(&o);
-    const OcclusionScene scene(meshes);
+    const auto t_build = Clock::now();
+    if (scene_ && scene_->update_positions(meshes)) {
+        local.scene_updated = true;
+    } else {
+        scene_.reset();
+        scene_ = std::make_unique<OcclusionScene>(meshes, build_);
+    }
+    const OcclusionScene& scene = *scene_;
+    const auto t_cast = Clock::now();
 
     // Ray origins sit off the surface by a length that scales with the mesh,
     // so the same bake works at 1e-3 and at 1e4 units.
@@ -102,6 +134,10 @@ void bake_frame(const FrameGeometry& geometry, const std::vector<std::uint32_t>&
         }
     }, progress, progress_from, progress_to);
 
+    const auto t_end = Clock::now();
+    local.seconds_setup = std::chrono::duration<double>(t_build - t_setup).count();
+    local.seconds_build = std::chrono::duration<double>(t_cast - t_build).count();
+    local.seconds_cast = std::chrono::duration<double>(t_end - t_cast).count();
     local.rays_cast = n_vertices * std::size_t(n_cast);
     local.rays_counted = n_vertices * rays.directions.size();
     if (stats) *stats = local;

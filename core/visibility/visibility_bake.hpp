@@ -12,6 +12,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -52,6 +53,10 @@ struct FrameBakeStats {
     std::size_t rays_cast = 0;       // rays actually traced
     std::size_t rays_counted = 0;    // rays that entered the projection (cast + below-horizon ones)
     FrameStats frames;               // repaired normals, fallback tangents
+    // Seconds spent on: the ray set, tangent frames and checks; building (or
+    // updating) the Embree scene; casting and projecting.
+    double seconds_setup = 0.0, seconds_build = 0.0, seconds_cast = 0.0;
+    bool scene_updated = false;      // the previous frame's Embree scene was updated, not built anew
 };
 
 // Throws ArgumentError for settings out of range.
@@ -63,6 +68,33 @@ void check_bake_settings(const BakeSettings& settings);
 void bake_frame(const FrameGeometry& geometry, const std::vector<std::uint32_t>& neighbours,
                 const BakeSettings& settings, float* visibility_out, const Progress& progress = {},
                 FrameBakeStats* stats = nullptr, double progress_from = 0.0, double progress_to = 1.0);
+
+// Frame after frame of one mesh: keeps the ray set and the Embree scene
+// between frames, so that a frame whose meshes have the structure of the
+// previous one (same vertex and triangle arrays, positions aside) only
+// updates the vertex buffers and recommits (SceneBuild decides rebuild or
+// refit). Gives exactly the result of bake_frame. One bake at a time.
+struct RaySet;
+class FrameBaker {
+public:
+    explicit FrameBaker(const BakeSettings& settings, SceneBuild build = SceneBuild::Medium);
+    ~FrameBaker();
+    FrameBaker(const FrameBaker&) = delete;
+    FrameBaker& operator=(const FrameBaker&) = delete;
+
+    const BakeSettings& settings() const { return settings_; }
+    SceneBuild scene_build() const { return build_; }
+    void set_threads(int threads);
+    void bake(const FrameGeometry& geometry, const std::vector<std::uint32_t>& neighbours, float* visibility_out,
+              const Progress& progress = {}, FrameBakeStats* stats = nullptr, double progress_from = 0.0,
+              double progress_to = 1.0);
+
+private:
+    BakeSettings settings_;
+    SceneBuild build_;
+    std::unique_ptr<RaySet> rays_;
+    std::unique_ptr<OcclusionScene> scene_;
+};
 
 // The direction set of a bake in the local frame (+z = normal) with its SH
 // projection weights: row i of `projection` (order² values) is what a

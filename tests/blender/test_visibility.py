@@ -115,13 +115,72 @@ def test_bake_operator_writes_a_model_and_reports_the_joints(addon, tmp_path):
     assert "rigidly" in summary["dropped_joints"]["spine"]
     assert "deforms no vertex" in summary["dropped_joints"]["control"]
     assert summary["frames"] == 12 and summary["holdout_frames"] == 3
+    # model_holdout is the model as stored (constant vertices, pruned joints)
+    # fitted without the held-out frames; the unpruned ridge solution is reported beside it.
     assert summary["model_holdout"]["ao_mean_abs"] < HOLDOUT_AO_THRESHOLD
+    assert summary["model_holdout_unpruned"]["samples"] == summary["model_holdout"]["samples"] > 0
     assert summary["zh_fit"]["sh_rms"] < summary["model_holdout"]["sh_rms"]
     assert summary["model_bytes"] < summary["dense_bytes"]
     assert summary["constant_vertices"] > 0
     model = native.module.VisibilityPoseModel.load(s.model_path)
     assert model.vertex_count == len(obj.data.vertices)
     assert model.joints == [j for j in rig.pose.bones.keys() if j in summary["active_joints"]]
+    assert model.summary["holdout_ao_mean_abs"] == pytest.approx(summary["model_holdout"]["ao_mean_abs"])
+    # The saved file itself on poses it never saw (odd frames; the bake used
+    # the odd frames 1, 3, ... 23 too, so take the in-between poses of a
+    # second action-free bake at even frames): same threshold.
+    _, unseen = bake.bake_training_set(bpy.context, obj, 2, 22, 4, rays=64)
+    assert model.evaluate(unseen)["ao_mean_abs"] < HOLDOUT_AO_THRESHOLD
+
+
+def test_mesh_reading_matches_blender_triangles_and_transforms(addon):
+    obj, rig = character(addon)
+    obj.location = (0.3, -2.0, 1.0)
+    obj.rotation_euler = (0.4, 0.2, 1.1)
+    obj.scale = (1.0, 2.0, 0.5)
+    addon.frame_set(7)
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    evaluated = obj.evaluated_get(depsgraph)
+    mesh = evaluated.to_mesh()
+    try:
+        mesh.calc_loop_triangles()
+        blender_tris = np.array([tuple(t.vertices) for t in mesh.loop_triangles])
+        world = evaluated.matrix_world
+        normal_matrix = world.to_3x3().inverted().transposed()
+        positions = np.array([world @ v.co for v in mesh.vertices])
+        normals = np.array([normal_matrix @ v.normal for v in mesh.vertices])
+        fixed = scene_data.mesh_triangles(mesh, fixed_split=True)
+        sizes, loops = scene_data.polygon_topology(mesh)
+    finally:
+        evaluated.to_mesh_clear()
+    # The fixed split (run time only): the polygons' own vertices, two triangles per quad, as many as Blender's.
+    assert len(fixed) == len(blender_tris)
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    k = 0
+    for start, size in zip(starts, sizes):
+        corners = set(loops[start:start + size])
+        for _ in range(size - 2):
+            assert set(fixed[k]) <= corners and len(set(fixed[k])) == 3
+            k += 1
+    buffers = scene_data.MeshBuffers(obj.data)
+    for _ in range(2):  # reused arrays give the same as fresh ones
+        fresh = scene_data.evaluated_mesh(obj, depsgraph)
+        reused = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False, buffers=buffers)
+        for frame in (fresh, reused):
+            assert np.abs(frame.positions - positions).max() < 1e-4
+            assert np.abs(frame.normals - normals).max() < 1e-4
+        # The bake traces Blender's own triangles. (Blender 3.4 may split a
+        # borderline-flat quad differently between two to_mesh() copies.)
+        assert fresh.triangles.shape == blender_tris.shape
+        assert (fresh.triangles != blender_tris).any(axis=1).sum() <= 0.002 * len(blender_tris)
+        assert np.array_equal(reused.triangles, fixed)
+    assert fresh.topology == scene_data.topology_hash(obj.data)
+    # An n-gon goes through Blender's own triangulation even with the fixed split.
+    bpy.ops.mesh.primitive_circle_add(vertices=7, fill_type="NGON")
+    circle = bpy.context.active_object.data
+    circle.calc_loop_triangles()
+    assert np.array_equal(scene_data.mesh_triangles(circle, fixed_split=True),
+                          np.array([tuple(t.vertices) for t in circle.loop_triangles]))
 
 
 def test_unseen_poses_are_shaded_by_the_handler_and_match_blender_ray_casts(addon, tmp_path):
@@ -187,6 +246,42 @@ def test_world_colour_strength_and_environment_rotation_are_honoured(addon, tmp_
     flipped = attribute(obj, "penumbra_shading", 4)[:, 0].copy()
     assert upright[top] > 0.8 and flipped[top] < 0.2
     assert flipped[bottom] > upright[bottom] + 0.5
+
+
+def test_world_value_and_rgb_nodes_are_read_and_sky_texture_is_reported(addon, tmp_path):
+    obj, rig = character(addon)
+    world = uniform_world(addon)
+    assert bake_op(tmp_path) == {"FINISHED"}
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    unit = attribute(obj, "penumbra_shading", 4)[:, :3].copy()
+    tree = world.node_tree
+    background = tree.nodes["Background"]
+    # Strength from a Value node, Color from an RGB node.
+    value = tree.nodes.new("ShaderNodeValue")
+    value.outputs[0].default_value = 3.0
+    tree.links.new(value.outputs[0], background.inputs["Strength"])
+    rgb_node = tree.nodes.new("ShaderNodeRGB")
+    rgb_node.outputs[0].default_value = (0.2, 0.5, 1.0, 1.0)
+    tree.links.new(rgb_node.outputs[0], background.inputs["Color"])
+    reading = scene_data.read_world(addon)
+    assert reading.supported and reading.kind == "uniform" and reading.strength == 3.0
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    lit = attribute(obj, "penumbra_shading", 4)[:, :3]
+    np.testing.assert_allclose(lit, unit * 3.0 * np.array([0.2, 0.5, 1.0]), rtol=1e-4, atol=1e-5)
+    # Sky Texture: unsupported, said so (the panel shows the note), the Background colour stands in.
+    sky = tree.nodes.new("ShaderNodeTexSky")
+    tree.links.new(sky.outputs["Color"], background.inputs["Color"])
+    background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    reading = scene_data.read_world(addon)
+    assert not reading.supported and "Sky Texture is not supported" in reading.note
+    lighting, note = scene_data.world_lighting(addon, 4)
+    assert note == reading.note
+    assert lighting[0, 0] == pytest.approx(3.0 * math.sqrt(4 * math.pi)) and not lighting[1:].any()
+    # A Strength fed by something else than a Value node: unsupported, its own value is used.
+    tree.links.new(tree.nodes.new("ShaderNodeMath").outputs[0], background.inputs["Strength"])
+    background.inputs["Strength"].default_value = 0.5
+    reading = scene_data.read_world(addon)
+    assert not reading.supported and reading.strength == 0.5 and "Strength" in reading.note
 
 
 def test_view_dependent_brdfs_use_the_scene_camera(addon, tmp_path):
@@ -375,6 +470,31 @@ def test_cancel_mid_bake_leaves_the_earlier_model_untouched(addon, tmp_path):
     assert open(path, "rb").read() == before
     assert obj.penumbra_visibility.report == report
     assert addon.frame_current == 1  # the frame is restored
+
+
+def test_overlapped_reading_and_tracing_bakes_the_same_frames(addon):
+    obj, rig = character(addon)
+    sets = []
+    for overlap in (False, True):
+        job = bake.BakeJob(bpy.context, obj, 1, 7, 2, 32, 1, 4, None)
+        done = []
+        try:
+            bake.bake_frames(job, after_frame=done.append, overlap=overlap)
+        finally:
+            job.restore_frame()
+        assert done == [0, 1, 2, 3]
+        sets.append(job.training)
+    assert sets[0].frame_numbers == sets[1].frame_numbers == [1.0, 3.0, 5.0, 7.0]
+    for i in range(4):
+        np.testing.assert_array_equal(sets[0].visibility(i), sets[1].visibility(i))
+    # Cancelling from the worker's progress stops the overlapped bake too, frame restored.
+    job = bake.BakeJob(bpy.context, obj, 1, 24, 1, 1024, 1, 4, None)
+    with pytest.raises(native.module.Cancelled):
+        try:
+            bake.bake_frames(job, progress=lambda fraction: fraction < 0.05, overlap=True)
+        finally:
+            job.restore_frame()
+    assert addon.frame_current == 1
 
 
 def test_model_from_another_mesh_or_armature_is_refused(addon, tmp_path):

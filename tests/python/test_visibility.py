@@ -138,3 +138,63 @@ def test_progress_false_cancels_and_keeps_the_set_unchanged():
     with pytest.raises(ZeroDivisionError):
         ts.bake_frame(0, positions, normals, tris, nb, np.eye(3)[None], progress=lambda f: 1 / 0)
     assert len(ts) == 0
+
+
+def test_scene_builds_give_the_same_visibility_and_a_bad_name_is_a_value_error():
+    positions, normals, tris, n_body = two_sphere_character()
+    neighbours = p.visibility_reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
+    results = {}
+    for build in ("high", "medium", "low", "refit"):
+        ts = p.VisibilityTrainingSet(len(positions), 0, ["root", "arm"], rays=64)
+        stats = []
+        for i, angle in enumerate((0.0, 0.4, 0.8)):  # the arm moves: the kept scene is updated
+            r = rot_z(angle)
+            posed = positions.copy()
+            posed[n_body:] = positions[n_body:] @ r.T
+            posed_normals = normals.copy()
+            posed_normals[n_body:] = normals[n_body:] @ r.T
+            stats.append(ts.bake_frame(i, posed, posed_normals, tris, neighbours,
+                                       np.stack([np.eye(3, dtype=np.float32), r]), scene_build=build))
+        assert [s["scene_updated"] for s in stats] == [False, True, True]
+        assert all(s["seconds_cast"] > 0 for s in stats)
+        results[build] = [ts.visibility(i) for i in range(3)]
+    for build in ("medium", "low", "refit"):
+        for a, b in zip(results["high"], results[build]):
+            np.testing.assert_array_equal(a, b)
+    p.visibility_release_bake_cache()
+    ts = p.VisibilityTrainingSet(len(positions), 0, ["root", "arm"], rays=64)
+    with pytest.raises(ValueError, match="scene_build"):
+        ts.bake_frame(0, positions, normals, tris, neighbours, np.stack([np.eye(3, dtype=np.float32)] * 2),
+                      scene_build="fast")
+
+
+def test_shading_from_many_threads_at_once_equals_one_at_a_time():
+    # The shader of an order is shared by every call (and keeps its Phong
+    # operators); concurrent calls with different BRDFs must not disturb each other.
+    import threading
+    ts = bake(np.linspace(0.0, np.pi / 2, 8))
+    model, _ = p.fit_visibility_model(ts, [(True, True), (True, False)], lobes=2)
+    positions, normals, tris, n_body = two_sphere_character()
+    neighbours = p.visibility_reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
+    rng = np.random.default_rng(1)
+    lighting = rng.normal(size=(16, 3))
+    lighting[0] += 5.0
+    calls = [dict(model="diffuse"), dict(model="phong", phong_exponent=8.0), dict(model="phong", phong_exponent=40.0),
+             dict(model="translucent", transmission=np.array([0.5, 0.2, 0.1]))]
+
+    def shade(kwargs):
+        return model.shade(np.stack([rot_z(0.3)]), positions, normals, tris, neighbours, lighting,
+                           camera=np.array([0.0, -5.0, 1.0]), **kwargs)[0]
+    expected = [shade(c) for c in calls]
+    assert not np.allclose(expected[1], expected[2])  # the exponents do differ
+    got = [None] * (3 * len(calls))
+
+    def worker(k):
+        got[k] = shade(calls[k % len(calls)])
+    threads = [threading.Thread(target=worker, args=(k,)) for k in range(len(got))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for k, result in enumerate(got):
+        np.testing.assert_array_equal(result, expected[k % len(calls)])

@@ -50,6 +50,11 @@ def draw_panel(layout, context):
     row.operator("penumbra.setup_material", icon="MATERIAL")
     box.prop(scene_settings, "live_update")
     box.prop(scene_settings, "threads")
+    from .scene_data import read_world
+    world = read_world(context.scene)
+    row = box.row()
+    row.alert = not world.supported
+    row.label(text=f"Lighting: {world.note}", icon="WORLD" if world.supported else "ERROR")
     if s.status:
         alert = box.box()
         alert.alert = True
@@ -66,7 +71,10 @@ def draw_panel(layout, context):
             box.label(text=f"{summary['frames']} frames, {summary['rays']} rays, {summary['lobes']} lobes")
             box.label(text=f"Active joints: {', '.join(summary['active_joints']) or 'none'}")
             box.label(text=f"ZH fit error (RMS): {summary['zh_fit']['sh_rms']:.4f}")
-            box.label(text=f"Held-out AO error: {summary['model_holdout']['ao_mean_abs']:.4f}")
+            if summary.get("holdout_frames"):
+                box.label(text=f"Held-out AO error (saved model): {summary['model_holdout']['ao_mean_abs']:.4f}")
+            else:
+                box.label(text="No held-out frames (bake 8 or more)")
             box.label(text=f"Model {summary['model_bytes'] / 1e6:.2f} MB (dense {summary['dense_bytes'] / 1e6:.2f} MB)")
             box.label(text=f"Bake {summary['seconds_bake']:.1f} s, fit {summary['seconds_fit']:.1f} s")
 

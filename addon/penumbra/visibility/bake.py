@@ -82,6 +82,7 @@ class BakeJob:
         self.diagnostics = None
         self.rays_cast = 0
         self.seconds_trace = 0.0  # inside the C++ bake (frames, BVH, rays, projection)
+        self.seconds = {"pose": 0.0, "read": 0.0, "setup": 0.0, "build": 0.0, "cast": 0.0}  # breakdown
         self.repaired_normals = 0
 
     def gather(self, entry):
@@ -97,9 +98,12 @@ class BakeJob:
                 self.armature.animation_data.action = action
             frame_id = self.actions.index(action) * 100000 + frame
         from . import runtime
+        started = time.perf_counter()
         with runtime.paused():  # the bake's own frame changes need no shading
             self.scene.frame_set(frame)
         depsgraph = bpy.context.evaluated_depsgraph_get()
+        posed = time.perf_counter()
+        self.seconds["pose"] += posed - started
         mesh = scene_data.evaluated_mesh(self.obj, depsgraph)
         if len(mesh.positions) != self.vertex_count or mesh.topology != self.topology:
             changing = [m.name for m in self.obj.modifiers if m.type not in DEFORM_ONLY]
@@ -116,6 +120,7 @@ class BakeJob:
             self.diagnostics = d
         occluders = scene_data.occluder_meshes(self.occluders, depsgraph, self.obj)
         rotations = scene_data.bone_rotations(self.armature)
+        self.seconds["read"] += time.perf_counter() - posed
         return frame_id, mesh, rotations, occluders
 
     def bake(self, gathered, progress=None):
@@ -125,10 +130,13 @@ class BakeJob:
         stats = self.training.bake_frame(float(frame), mesh.positions, mesh.normals, mesh.triangles, self.neighbours,
                                          rotations, occluders, threads=self.threads, progress=progress)
         self.seconds_trace += time.perf_counter() - started
+        for key in ("setup", "build", "cast"):
+            self.seconds[key] += stats["seconds_" + key]
         self.rays_cast += stats["rays_cast"]
         self.repaired_normals = max(self.repaired_normals, stats["repaired_normals"])
 
     def restore_frame(self):
+        native.require().visibility_release_bake_cache()  # the Embree scene kept between frames
         if self.actions and self.armature.animation_data is not None and \
                 self.armature.animation_data.action != self.original_action:
             self.armature.animation_data.action = self.original_action
@@ -143,23 +151,78 @@ DEFORM_ONLY = {"ARMATURE", "CAST", "CURVE", "DISPLACE", "HOOK", "LAPLACIANDEFORM
                "VERTEX_WEIGHT_MIX", "VERTEX_WEIGHT_PROXIMITY"}
 
 
+def bake_frames(job, progress=None, after_frame=None, overlap=False):
+    """Bakes every frame of `job`. `progress(fraction)` returns False to
+    cancel; `after_frame(k)` runs on the main thread once frame k is baked.
+
+    overlap=False (default): read a frame (main thread, bpy), then trace it.
+    overlap=True: the main thread poses and reads frame k + 1 while a worker
+    thread traces frame k (the C++ bake releases the GIL). Measured on two
+    cores (docs/visibility-benchmark.md) the overlap is *slower*: Blender's
+    depsgraph threads, busy posing the next frame, take the cores from the
+    casting threads, which costs more than the reading it hides. Errors of
+    either side are raised here, after the worker has stopped."""
+    if not overlap:
+        n = len(job.frames)
+        for k, entry in enumerate(job.frames):
+            gathered = job.gather(entry)
+
+            def frame_progress(fraction, k=k):
+                return True if progress is None else progress((k + fraction) / n)
+            job.bake(gathered, frame_progress if progress is not None else None)
+            if after_frame:
+                after_frame(k)
+        return
+    n = len(job.frames)
+    state = {"error": None}
+
+    def trace(gathered, k):
+        def frame_progress(fraction):
+            return True if progress is None else progress((k + fraction) / n)
+        try:
+            job.bake(gathered, frame_progress)
+        except BaseException as error:  # noqa: BLE001 - re-raised on the main thread
+            state["error"] = error
+
+    worker = None
+    finished = -1
+
+    def join():
+        nonlocal worker, finished
+        if worker is None:
+            return
+        worker.join()
+        worker = None
+        if state["error"] is not None:
+            raise state["error"]
+        finished += 1
+        if after_frame:
+            after_frame(finished)
+
+    try:
+        for k, entry in enumerate(job.frames):
+            gathered = job.gather(entry)
+            join()
+            worker = threading.Thread(target=trace, args=(gathered, k), daemon=True)
+            worker.start()
+        join()
+    finally:
+        if worker is not None:  # an error while gathering: let the running frame end first
+            worker.join()
+
+
 def bake_training_set(context, obj, frame_start, frame_end, frame_step, rays=256, sh_order=4, occluders=None,
                       below_horizon="occluded", threads=0, progress=None, log=None, actions=()):
     """Synchronous bake of one frame range (of each of `actions`, or of what the
     armature plays now) into a training set (the farm seam). Returns (job, training_set)."""
     job = BakeJob(context, obj, frame_start, frame_end, frame_step, rays, 1, sh_order, occluders, below_horizon,
                   threads, actions)
-    try:
-        for k, entry in enumerate(job.frames):
-            gathered = job.gather(entry)
 
-            def frame_progress(fraction, k=k):
-                if progress is None:
-                    return True
-                return progress((k + fraction) / len(job.frames))
-            job.bake(gathered, frame_progress)
-            if log:
-                log(f"visibility bake: frame {entry[1]} ({k + 1}/{len(job.frames)})")
+    def done(k):
+        if log:
+            log(f"visibility bake: frame {job.frames[k][1]} ({k + 1}/{len(job.frames)})")
+    try:
+        bake_frames(job, progress, done)
     finally:
         job.restore_frame()
     return job, job.training
@@ -186,7 +249,8 @@ def summary_of(job_or_none, training, report, model_path, seconds_bake, seconds_
         "joints": report["joints"],
         "zh_fit": report["zh_fit"],
         "model_training": report["model_training"],
-        "model_holdout": report["model_holdout"],
+        "model_holdout": report["model_holdout"],  # the model as stored (pruned), fitted without those frames
+        "model_holdout_unpruned": report["model_holdout_unpruned"],
         "holdout_frames": report["holdout_frames"],
         "ridge_relative": report["ridge_relative"],
         "constant_vertices": report["constant_vertices"],
@@ -313,10 +377,11 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
         summary = summary_of(job, job.training, report, r["path"], seconds_bake,
                              time.perf_counter() - self._fit_started, model)
         store_result(r["obj"], model, summary, r["path"])
+        held_out = (f"held-out AO error {summary['model_holdout']['ao_mean_abs']:.4f} (saved model)"
+                    if summary["holdout_frames"] else "no held-out frames (fewer than 8 frames)")
         self.report({"INFO"}, f"Baked {len(job.frames)} frames of '{r['obj'].name}': "
-                              f"{len(summary['active_joints'])} active joints, held-out AO error "
-                              f"{summary['model_holdout']['ao_mean_abs']:.4f}, model {summary['model_bytes'] / 1e6:.2f} MB "
-                              f"→ {r['path']}")
+                              f"{len(summary['active_joints'])} active joints, {held_out}, "
+                              f"model {summary['model_bytes'] / 1e6:.2f} MB → {r['path']}")
 
     # Synchronous (background mode, scripts) ------------------------------------
     def execute(self, context):
@@ -338,10 +403,7 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
             return report
 
         try:
-            for k, entry in enumerate(job.frames):
-                gathered = job.gather(entry)
-                job.bake(gathered, None)
-                printer("bake visibility")((k + 1) / len(job.frames))
+            bake_frames(job, None, lambda k: printer("bake visibility")((k + 1) / len(job.frames)))
             job.restore_frame()
             seconds_bake = time.perf_counter() - self._started
             self._fit_started = time.perf_counter()
@@ -368,11 +430,12 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
         self._error = None
         self._result = None
         self._next = 0          # next frame index to gather
+        self._traced = 0        # frames handed to the worker
         self._phase = "bake"
         self._seconds_bake = 0.0
         wm = context.window_manager
         wm.progress_begin(0, 1000)
-        self._timer = wm.event_timer_add(0.05, window=context.window)
+        self._timer = wm.event_timer_add(0.02, window=context.window)
         wm.modal_handler_add(self)
         return {"RUNNING_MODAL"}
 
@@ -403,9 +466,12 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
         job = self._job
         try:
             if self._phase == "bake":
+                # Read, then trace (reading the next frame while tracing measured
+                # slower on two cores: see bake_frames).
                 if self._next < len(job.frames):
                     gathered = job.gather(job.frames[self._next])
                     self._next += 1
+                    self._traced += 1
                     self._worker(lambda progress, g=gathered: job.bake(g, progress))
                 else:
                     job.restore_frame()
@@ -425,8 +491,8 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
     def _show_progress(self, context):
         job = self._job
         if self._phase == "bake":
-            done = (max(self._next - 1, 0) + (self._fraction if self._thread else 1.0)) / len(job.frames)
-            overall, text = 0.9 * done, f"Baking visibility: frame {min(self._next, len(job.frames))}/{len(job.frames)}"
+            done = (max(self._traced - 1, 0) + (self._fraction if self._thread else 1.0)) / len(job.frames)
+            overall, text = 0.9 * done, f"Baking visibility: frame {self._traced}/{len(job.frames)}"
         else:
             overall, text = 0.9 + 0.1 * self._fraction, "Fitting the pose model"
         context.window_manager.progress_update(int(1000 * overall))
@@ -434,6 +500,9 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
             context.workspace.status_text_set(f"{text} ({100 * overall:.0f}%) — Esc to cancel")
 
     def _stop(self, context, error, finished=False):
+        if self._thread is not None and self._thread.is_alive():
+            self._cancel = True  # the C++ side stops at its next progress report (<= 50 ms)
+            self._thread.join()
         wm = context.window_manager
         wm.event_timer_remove(self._timer)
         wm.progress_end()

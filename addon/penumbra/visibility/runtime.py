@@ -47,6 +47,11 @@ class _Loaded:
         self.model = model
         sizes, loops = scene_data.polygon_topology(mesh)
         self.neighbours = core.visibility_reference_neighbours(len(mesh.vertices), sizes, loops)
+        # Arrays reused frame after frame (no per-frame allocation for the mesh
+        # read or the attribute write); the triangles only repair zero-length
+        # normals at run time, so the rest mesh's serve every frame.
+        self.buffers = scene_data.MeshBuffers(mesh)
+        self.rgba = np.ones((model.vertex_count, 4), dtype=np.float32)
 
 
 class paused:
@@ -111,7 +116,9 @@ def shade_object(obj, scene, depsgraph=None):
     armature = scene_data.armature_of(obj)
     rotations = scene_data.bone_rotations(armature, model.joints)
     depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
-    frame = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False)
+    t_read = time.perf_counter()
+    frame = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False, buffers=entry.buffers)
+    read_mesh = time.perf_counter() - t_read
     if len(frame.positions) != model.vertex_count:
         raise VisibilityInputError(f"'{obj.name}' has {len(frame.positions)} vertices after its modifiers; "
                                    f"the model has {model.vertex_count}")
@@ -125,19 +132,20 @@ def shade_object(obj, scene, depsgraph=None):
                                 threads=scene.penumbra.visibility.threads)
     # SH truncation and model error can overshoot a little: visibility is a
     # fraction, radiance is never negative.
-    ao = np.clip(ao, 0.0, 1.0)
-    rgb = np.maximum(rgb, 0.0)
+    np.clip(ao, 0.0, 1.0, out=ao)
+    np.maximum(rgb, 0.0, out=rgb)
     t2 = time.perf_counter()
     mesh = obj.data
     shading_name, visibility_name = _ensure_attributes(mesh)
-    rgba = np.ones((len(rgb), 4), dtype=np.float32)
+    rgba = entry.rgba
     rgba[:, :3] = rgb
-    mesh.attributes[shading_name].data.foreach_set("color", rgba.ravel())
-    mesh.attributes[visibility_name].data.foreach_set("value", ao.astype(np.float32))
+    mesh.attributes[shading_name].data.foreach_set("color", rgba.reshape(-1))
+    mesh.attributes[visibility_name].data.foreach_set("value", ao)
     mesh.update()
     t3 = time.perf_counter()
     last_timings = {
         "gather": t1 - t0,
+        "read_mesh": read_mesh,
         "pose_to_lobes": info["seconds_pose_to_lobes"],
         "frames": info["seconds_frames"],
         "shading": info["seconds_shading"],

@@ -30,7 +30,11 @@ def polygon_topology(mesh):
     starts = np.empty(len(mesh.polygons), dtype=np.int32)
     mesh.polygons.foreach_get("loop_start", starts)
     loops = np.empty(len(mesh.loops), dtype=np.int32)
-    mesh.loops.foreach_get("vertex_index", loops)
+    corner_vert = mesh.attributes.get(".corner_vert") if hasattr(mesh, "attributes") else None
+    if corner_vert is not None and corner_vert.data_type == "INT" and len(corner_vert.data) == len(loops):
+        corner_vert.data.foreach_get("value", loops)  # Blender 4: one block copy, ~100× faster than loops
+    else:
+        mesh.loops.foreach_get("vertex_index", loops)
     if len(starts) and np.any(np.diff(starts) != sizes[:-1]):
         # Polygons out of loop order (never in practice): gather each polygon's loops.
         loops = np.concatenate([loops[s:s + n] for s, n in zip(starts, sizes)])
@@ -42,14 +46,50 @@ def topology_hash(mesh):
     return native.require().visibility_topology_hash(len(mesh.vertices), sizes, loops)
 
 
-def _vertex_normals(mesh):
+def _vertex_normals(mesh, out=None):
+    """(V, 3) float32 vertex normals (Blender computes and caches them)."""
     n = len(mesh.vertices)
-    normals = np.empty(3 * n, dtype=np.float32)
+    normals = np.empty((n, 3), dtype=np.float32) if out is None else out
     if hasattr(mesh, "vertex_normals"):  # Blender 3.5+
-        mesh.vertex_normals.foreach_get("vector", normals)
+        mesh.vertex_normals.foreach_get("vector", normals.reshape(-1))
     else:
-        mesh.vertices.foreach_get("normal", normals)
-    return normals.reshape(n, 3)
+        mesh.vertices.foreach_get("normal", normals.reshape(-1))
+    return normals
+
+
+def _vertex_positions(mesh, out=None):
+    """(V, 3) float32 positions. The `position` attribute (Blender 3.5+) reads
+    as one block copy; `vertices.co` walks every vertex (~40× slower)."""
+    n = len(mesh.vertices)
+    co = np.empty((n, 3), dtype=np.float32) if out is None else out
+    position = mesh.attributes.get("position") if hasattr(mesh, "attributes") else None
+    if position is not None and position.data_type == "FLOAT_VECTOR" and position.domain == "POINT":
+        position.data.foreach_get("vector", co.reshape(-1))
+    else:
+        mesh.vertices.foreach_get("co", co.reshape(-1))
+    return co
+
+
+def mesh_triangles(mesh, sizes=None, loops=None, fixed_split=False):
+    """(M, 3) int64 triangles of a mesh: Blender's own loop triangles (its
+    split of a quad follows the shape, so it can change with the pose), or,
+    with fixed_split and only triangles and quads, every quad split 0-1-2,
+    0-2-3 with numpy (fast; for the run time, where triangles only repair
+    zero-length normals)."""
+    if fixed_split:
+        if sizes is None:
+            sizes, loops = polygon_topology(mesh)
+        if not (len(sizes) and sizes.max() > 4):
+            per_polygon = np.maximum(sizes - 2, 0)
+            starts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+            polygon = np.repeat(np.arange(len(sizes)), per_polygon)
+            within = np.arange(int(per_polygon.sum())) - np.repeat(np.cumsum(per_polygon) - per_polygon, per_polygon)
+            first = starts[polygon]
+            return np.stack([loops[first], loops[first + within + 1], loops[first + within + 2]], axis=1).astype(np.int64)
+    mesh.calc_loop_triangles()
+    tri = np.empty(3 * len(mesh.loop_triangles), dtype=np.int32)
+    mesh.loop_triangles.foreach_get("vertices", tri)
+    return tri.reshape(-1, 3).astype(np.int64)
 
 
 class FrameMesh:
@@ -62,34 +102,66 @@ class FrameMesh:
         self.topology = topology      # hash of the polygon topology
 
 
-def evaluated_mesh(obj, depsgraph, with_topology=True):
-    """The mesh as modifiers leave it at the current frame, in world space."""
-    evaluated = obj.evaluated_get(depsgraph)
-    mesh = evaluated.to_mesh()
-    try:
+class MeshBuffers:
+    """What the run time keeps from frame to frame of one object's evaluated
+    mesh: triangles (fixed quad split: at run time they only repair
+    zero-length normals, so the split need not follow the pose) and the
+    arrays the positions and normals are read into (reused: the result of
+    evaluated_mesh(..., buffers=b) is overwritten by the next read)."""
+
+    def __init__(self, mesh):
         n = len(mesh.vertices)
-        co = np.empty(3 * n, dtype=np.float32)
-        mesh.vertices.foreach_get("co", co)
-        co = co.reshape(n, 3).astype(np.float64)
-        normals = _vertex_normals(mesh).astype(np.float64)
-        mesh.calc_loop_triangles()
-        tri = np.empty(3 * len(mesh.loop_triangles), dtype=np.int32)
-        mesh.loop_triangles.foreach_get("vertices", tri)
-        topology = topology_hash(mesh) if with_topology else None
-    finally:
-        evaluated.to_mesh_clear()
+        self.vertex_count = n
+        self.triangles = mesh_triangles(mesh, fixed_split=True)
+        self.co = np.empty((n, 3), dtype=np.float32)
+        self.normals_local = np.empty((n, 3), dtype=np.float32)
+        self.positions = np.empty((n, 3), dtype=np.float32)
+        self.normals = np.empty((n, 3), dtype=np.float32)
+
+
+def _to_world(evaluated, co, normals, positions_out=None, normals_out=None):
     world = np.array(evaluated.matrix_world, dtype=np.float64)
     linear = world[:3, :3]
-    positions = co @ linear.T + world[:3, 3]
     # Normals transform by the inverse transpose (non-uniform scale); a
     # singular matrix (scale 0) leaves them as they are.
     try:
         normal_matrix = np.linalg.inv(linear).T
     except np.linalg.LinAlgError:
         normal_matrix = np.eye(3)
-    normals = normals @ normal_matrix.T
-    return FrameMesh(positions.astype(np.float32), normals.astype(np.float32),
-                     tri.reshape(-1, 3).astype(np.int64), topology)
+    if np.array_equal(world, np.eye(4)):
+        if positions_out is None:
+            return co, normals
+        np.copyto(positions_out, co)
+        np.copyto(normals_out, normals)
+        return positions_out, normals_out
+    positions = np.matmul(co, linear.T.astype(np.float32), out=positions_out)
+    positions += world[:3, 3].astype(np.float32)
+    normals = np.matmul(normals, normal_matrix.T.astype(np.float32), out=normals_out)
+    return positions, normals
+
+
+def evaluated_mesh(obj, depsgraph, with_topology=True, buffers=None):
+    """The mesh as modifiers leave it at the current frame, in world space.
+    `buffers` (MeshBuffers of this object): reuse its triangles and arrays."""
+    evaluated = obj.evaluated_get(depsgraph)
+    mesh = evaluated.to_mesh()
+    try:
+        n = len(mesh.vertices)
+        reuse = buffers is not None and buffers.vertex_count == n
+        co = _vertex_positions(mesh, buffers.co if reuse else None)
+        normals = _vertex_normals(mesh, buffers.normals_local if reuse else None)
+        if with_topology:
+            sizes, loops = polygon_topology(mesh)
+            topology = native.require().visibility_topology_hash(n, sizes, loops)
+        else:
+            sizes = loops = topology = None
+        # The bake needs Blender's own triangles of this pose (the occluding surface).
+        tri = buffers.triangles if reuse else mesh_triangles(mesh)
+    finally:
+        evaluated.to_mesh_clear()
+    positions, normals = _to_world(evaluated, co, normals, buffers.positions if reuse else None,
+                                   buffers.normals if reuse else None)
+    return FrameMesh(positions, normals, tri, topology)
 
 
 def occluder_meshes(collection, depsgraph, exclude):
@@ -201,41 +273,120 @@ def _image_pixels_top_down(image):
     return pixels
 
 
-def world_lighting(scene, order):
-    """(order², 3) SH of the World's radiance (scene-linear), and a note on what
-    was used. Honours Environment Texture (image, colour space), a Mapping
-    node's rotation, and the Background strength; otherwise the uniform
-    colour. Unsupported node set-ups fall back to the Background colour."""
-    core = native.require()
-    n_sh = order * order
+class WorldReading:
+    """What the World's node tree says about the lighting, without pixels:
+    `kind` 'black', 'uniform' or 'environment'; colour (RGB), strength,
+    the Environment Texture node and rotation; `note` says what was read, and
+    `supported` is False when part of the tree could not be read (then the
+    uniform Background colour, or black, stands in, and the panel says so)."""
+
+    def __init__(self):
+        self.kind = "black"
+        self.colour = np.zeros(3)
+        self.strength = 1.0
+        self.environment = None
+        self.rotation = np.eye(3)
+        self.note = ""
+        self.supported = True
+        self.problems = []
+
+
+def _float_input(socket, reading, what):
+    """A float input: its own value, or a Value node's; anything else is unsupported (its default is used)."""
+    source = _socket_source(socket)
+    if source is None:
+        return float(socket.default_value)
+    if source.bl_idname == "ShaderNodeValue":
+        return float(source.outputs[0].default_value)
+    reading.problems.append(f"{what} comes from a {source.bl_label} node (unsupported: its own value is used)")
+    return float(socket.default_value)
+
+
+def read_world(scene):
+    """Walks the World's nodes: Background (Color, Strength) at the active
+    World Output; Strength from its value or a Value node; Color from its
+    value, an RGB node, or an Environment Texture (with an optional Mapping
+    node's rotation). Sky Texture and other sources are reported unsupported."""
+    r = WorldReading()
     world = scene.world
-    lighting = np.zeros((n_sh, 3))
-    sqrt_4pi = np.sqrt(4.0 * np.pi)
     if world is None:
-        return lighting, "no World: black"
+        r.note = "no World: black"
+        return r
     if not world.use_nodes or world.node_tree is None:
-        lighting[0] = np.array(world.color[:3]) * sqrt_4pi
-        return lighting, "World colour"
+        r.kind, r.colour, r.note = "uniform", np.array(world.color[:3], dtype=np.float64), "World colour"
+        return r
     tree = world.node_tree
     output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputWorld" and n.is_active_output), None)
     if output is None:
         output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputWorld"), None)
     background = _socket_source(output.inputs["Surface"]) if output else None
     if background is None or background.bl_idname != "ShaderNodeBackground":
-        return lighting, "World output not fed by a Background node: black"
-    strength = float(background.inputs["Strength"].default_value)
-    source = _socket_source(background.inputs["Color"])
-    if source is None or source.bl_idname != "ShaderNodeTexEnvironment" or source.image is None:
-        lighting[0] = np.array(background.inputs["Color"].default_value[:3]) * strength * sqrt_4pi
-        return lighting, "uniform Background colour"
-    image = source.image
-    rotation = np.eye(3)
+        r.note = "World output not fed by a Background node: black"
+        r.supported = background is None
+        if background is not None:
+            r.problems.append(f"the World output is fed by a {background.bl_label} node (unsupported)")
+        return _finish(r)
+    r.strength = _float_input(background.inputs["Strength"], r, "Strength")
+    colour_socket = background.inputs["Color"]
+    r.colour = np.array(colour_socket.default_value[:3], dtype=np.float64)
+    r.kind, r.note = "uniform", "uniform Background colour"
+    source = _socket_source(colour_socket)
+    if source is None:
+        return _finish(r)
+    if source.bl_idname == "ShaderNodeRGB":
+        r.colour = np.array(source.outputs[0].default_value[:3], dtype=np.float64)
+        r.note = f"uniform colour of '{source.name}'"
+        return _finish(r)
+    if source.bl_idname == "ShaderNodeTexSky":
+        r.problems.append("Sky Texture is not supported: the Background colour stands in")
+        return _finish(r)
+    if source.bl_idname != "ShaderNodeTexEnvironment":
+        r.problems.append(f"Color comes from a {source.bl_label} node (unsupported: the Background colour stands in)")
+        return _finish(r)
+    if source.image is None:
+        r.problems.append("the Environment Texture has no image: the Background colour stands in")
+        return _finish(r)
+    r.kind, r.environment, r.note = "environment", source, f"environment '{source.image.name}'"
     mapping = _socket_source(source.inputs["Vector"])
     if mapping is not None and mapping.bl_idname == "ShaderNodeMapping":
-        euler = mapping.inputs["Rotation"].default_value if "Rotation" in mapping.inputs else mapping.rotation
-        rotation = _euler_matrix(euler)
+        if "Rotation" in mapping.inputs:
+            if mapping.inputs["Rotation"].is_linked:
+                r.problems.append("the Mapping rotation is linked (unsupported: its own value is used)")
+            euler = mapping.inputs["Rotation"].default_value
+        else:
+            euler = mapping.rotation
+        r.rotation = _euler_matrix(euler)
         if mapping.vector_type in {"TEXTURE"}:
-            rotation = rotation.T
+            r.rotation = r.rotation.T
+    elif mapping is not None and mapping.bl_idname != "ShaderNodeTexCoord":
+        r.problems.append(f"the environment's Vector comes from a {mapping.bl_label} node (unsupported: ignored)")
+    return _finish(r)
+
+
+def _finish(r):
+    if r.problems:
+        r.supported = False
+        r.note += "; " + "; ".join(r.problems)
+    return r
+
+
+def world_lighting(scene, order):
+    """(order², 3) SH of the World's radiance (scene-linear), and a note on what
+    was used (read_world). Honours Environment Texture (image, colour space),
+    a Mapping node's rotation, the Background strength (or a Value node), an
+    RGB node; unsupported set-ups fall back to the Background colour and say
+    so in the note."""
+    core = native.require()
+    n_sh = order * order
+    lighting = np.zeros((n_sh, 3))
+    sqrt_4pi = np.sqrt(4.0 * np.pi)
+    r = read_world(scene)
+    if r.kind == "black":
+        return lighting, r.note
+    if r.kind == "uniform":
+        lighting[0] = r.colour * r.strength * sqrt_4pi
+        return lighting, r.note
+    image = r.environment.image
     key = (image.name, image.filepath, tuple(image.size), image.colorspace_settings.name, order)
     coefficients = _lighting_cache.get(key)
     if coefficients is None:
@@ -245,6 +396,7 @@ def world_lighting(scene, order):
         coefficients = core.project_environment(order, pixels)
         _lighting_cache.clear()
         _lighting_cache[key] = coefficients
+    rotation = r.rotation
     # The texture is looked up at R·d: L(d) = E(R d), so its SH are D(Rᵀ)·c.
     lit = core.rotate_sh(coefficients, rotation.T) if not np.allclose(rotation, np.eye(3)) else coefficients
-    return np.asarray(lit) * strength, f"environment '{image.name}'"
+    return np.asarray(lit) * r.strength, r.note

@@ -176,6 +176,58 @@ TEST(VisibilityBake, occluders_shadow_the_mesh) {
     EXPECT_LT(ambient_occlusion(4, top_shadowed), 0.7);
 }
 
+TEST(VisibilityBake, frame_baker_reuses_its_scene_and_matches_fresh_bakes_frame_after_frame) {
+    // A sphere shadowed by a second one that moves from frame to frame (same
+    // structure: the baker only updates the vertex buffers), then a frame with
+    // another occluder structure (rebuilt). Every frame must equal a bake from
+    // scratch, at every scene build.
+    TestMesh m;
+    add_sphere(m, Eigen::Vector3d::Zero(), 1.0);
+    const auto neighbours = reference_neighbours(m.mesh.vertex_count(), {}, m.mesh.triangles);
+    BakeSettings s;
+    s.rays = 128;
+    for (SceneBuild build : {SceneBuild::High, SceneBuild::Medium, SceneBuild::Low, SceneBuild::Refit}) {
+        FrameBaker baker(s, build);
+        for (int f = 0; f < 4; ++f) {
+            TestMesh blocker;
+            if (f < 3) add_sphere(blocker, Eigen::Vector3d(0.8 * f - 0.8, 0, 1.7), 0.5);
+            else add_sphere(blocker, Eigen::Vector3d(0, 0, 1.7), 0.5, 12, 6);  // other structure
+            FrameGeometry g = geometry_of(m);
+            g.occluders.push_back(blocker.mesh);
+            std::vector<float> kept(m.mesh.vertex_count() * 16), fresh(kept.size());
+            FrameBakeStats stats;
+            baker.bake(g, neighbours, kept.data(), {}, &stats);
+            bake_frame(g, neighbours, s, fresh.data());
+            EXPECT_EQ(stats.scene_updated, f == 1 || f == 2) << "frame " << f;
+            for (std::size_t i = 0; i < kept.size(); ++i) ASSERT_EQ(kept[i], fresh[i]) << "frame " << f << " value " << i;
+        }
+    }
+}
+
+TEST(VisibilityBake, updated_scene_answers_at_the_new_positions) {
+    TestMesh m;
+    add_sphere(m, Eigen::Vector3d(0, 0, 5), 1.0);
+    OcclusionScene scene({&m.mesh});
+    const Eigen::Vector3f up(0, 0, 1);
+    EXPECT_TRUE(scene.occluded1(Eigen::Vector3f::Zero(), up, 0.0f, 100.0f));
+    TestMesh moved;
+    add_sphere(moved, Eigen::Vector3d(5, 0, 0), 1.0);
+    ASSERT_TRUE(scene.update_positions({&moved.mesh}));
+    EXPECT_FALSE(scene.occluded1(Eigen::Vector3f::Zero(), up, 0.0f, 100.0f));
+    EXPECT_TRUE(scene.occluded1(Eigen::Vector3f::Zero(), Eigen::Vector3f(1, 0, 0), 0.0f, 100.0f));
+    // Another structure is refused and leaves the scene as it was.
+    TestMesh other;
+    add_sphere(other, Eigen::Vector3d(0, 0, 5), 1.0, 12, 6);
+    EXPECT_FALSE(scene.update_positions({&other.mesh}));
+    EXPECT_FALSE(scene.update_positions({&moved.mesh, &moved.mesh}));
+    EXPECT_TRUE(scene.occluded1(Eigen::Vector3f::Zero(), Eigen::Vector3f(1, 0, 0), 0.0f, 100.0f));
+    // A non-finite position is an error, the scene untouched.
+    TestMesh bad = moved;
+    bad.mesh.positions[4] = NAN;
+    EXPECT_THROW(scene.update_positions({&bad.mesh}), ArgumentError);
+    EXPECT_TRUE(scene.occluded1(Eigen::Vector3f::Zero(), Eigen::Vector3f(1, 0, 0), 0.0f, 100.0f));
+}
+
 TEST(VisibilityBake, inward_normals_are_detected) {
     TestMesh m;
     add_sphere(m, Eigen::Vector3d::Zero(), 1.0);

@@ -143,6 +143,45 @@ TEST(PoseModel, linear_data_is_reproduced_on_unseen_poses) {
     EXPECT_LT(evaluate_pose_model(model, unseen).sh_rms, 3e-3);
 }
 
+TEST(PoseModel, held_out_error_is_that_of_the_pruned_model_as_stored) {
+    std::vector<double> angles;
+    for (int f = 0; f < 16; ++f) angles.push_back(0.1 * f);
+    const TrainingSet set = synthetic_set(angles, 50, 1);
+    const std::vector<BoneInfluence> influence{{true, false}, {true, false}};
+    // Held out: every 4th frame (3, 7, 11, 15); the rest trains.
+    TrainingSet train = set, holdout = set;
+    train.frames.clear();
+    holdout.frames.clear();
+    for (std::size_t f = 0; f < set.frames.size(); ++f) (f % 4 == 3 ? holdout : train).frames.push_back(set.frames[f]);
+
+    // Tolerances so large that every vertex is stored as a constant: the
+    // stored model then ignores the pose (whatever λ), and its held-out error
+    // is that of the per-vertex mean of the training frames, which a model
+    // fitted on the training frames alone and evaluated on the held-out ones
+    // measures independently. The unpruned ridge model follows the pose and
+    // is far better: the report must not give its error for the stored model.
+    FitSettings s;
+    s.lobes = 1;
+    s.constant_tolerance = 1e9;
+    FitReport report;
+    fit_pose_model(set, influence, s, {}, &report);
+    FitSettings alone = s;
+    alone.holdout_stride = 0;
+    const PoseModel mean_model = fit_pose_model(train, influence, alone);
+    const Errors expected = evaluate_pose_model(mean_model, holdout);
+    EXPECT_NEAR(report.model_holdout.sh_rms, expected.sh_rms, 1e-5);
+    EXPECT_NEAR(report.model_holdout.ao_mean_abs, expected.ao_mean_abs, 1e-5);
+    EXPECT_EQ(report.model_holdout.samples, holdout.frames.size() * 50);
+    EXPECT_GT(report.model_holdout.sh_rms, 5 * report.model_holdout_unpruned.sh_rms);
+
+    // No pruning at all: the stored model is the ridge solution, same error.
+    s.constant_tolerance = 0.0;
+    s.prune_tolerance = 0.0;
+    fit_pose_model(set, influence, s, {}, &report);
+    EXPECT_NEAR(report.model_holdout.sh_rms, report.model_holdout_unpruned.sh_rms,
+                1e-4 * report.model_holdout_unpruned.sh_rms + 1e-7);
+}
+
 TEST(PoseModel, stays_finite_with_more_columns_than_frames_repeated_frames_and_still_joints) {
     // 3 distinct poses, repeated: far fewer frames than the 9 feature columns,
     // plus two joints that never move.
