@@ -520,7 +520,8 @@ def slope_ramp_group(lookup_image, spec, name=SLOPE_RAMP):
     over the facets the viewer sees: along the view's azimuth d the slope
     shifts by σ_s E[z] and narrows to σ_s sd[z] (microsurface.hpp), so
     v ~ N(v0 + k σ_s E[z] cos ψ, (k σ_s)² (1 − (1 − sd²) cos² ψ)), ψ the angle
-    between d and Direction."""
+    between d and Direction projected onto the surface (s · Direction means
+    the slope along that unit tangent)."""
     group, gin, gout = _new_group(name, [("Value at Zero Slope", "NodeSocketFloat", 0.5),
                                          ("Value per Slope", "NodeSocketFloat", 1.0),
                                          ("Slope Sigma", "NodeSocketFloat", 0.3),
@@ -534,7 +535,10 @@ def slope_ramp_group(lookup_image, spec, name=SLOPE_RAMP):
     cos_o = b.vmath("DOT_PRODUCT", incoming, normal)
     tangential = b.vmath("SUBTRACT", incoming, b.vscale(normal, cos_o))
     d = b.vmath("NORMALIZE", tangential)
-    direction = b.vmath("NORMALIZE", gin.outputs["Direction"])
+    # The slope is taken along Direction's projection onto the surface (a
+    # world vector is rarely tangent to a tilted surface): the unit tangent.
+    raw = gin.outputs["Direction"]
+    direction = b.vmath("NORMALIZE", b.vmath("SUBTRACT", raw, b.vscale(normal, b.vmath("DOT_PRODUCT", raw, normal))))
     cos_psi = b.vmath("DOT_PRODUCT", d, direction)
     ez, sdz, _ = _table(b, table, _cot_over_sigma(b, cos_o, gin.outputs["Slope Sigma"]), 1)
     k_sigma = b.math("MULTIPLY", gin.outputs["Value per Slope"], gin.outputs["Slope Sigma"])
