@@ -5,19 +5,21 @@
 namespace penumbra {
 
 namespace {
-template <bool Fix>
-PixelDefects scan(std::vector<float>& values, bool clamp_negative) {
+// Classifies every value; `fix` (if given) is applied to the defective ones.
+template <typename Fix>
+PixelDefects scan(const std::vector<float>& values, Fix&& fix) {
     PixelDefects d;
-    for (float& v : values) {
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        const float v = values[i];
         if (std::isnan(v)) {
             ++d.nan;
-            if constexpr (Fix) v = 0.0f;
+            fix(i, false);
         } else if (std::isinf(v)) {
             ++d.inf;
-            if constexpr (Fix) v = 0.0f;
+            fix(i, false);
         } else if (v < 0.0f) {
             ++d.negative;
-            if constexpr (Fix) if (clamp_negative) v = 0.0f;
+            fix(i, true);
         }
     }
     return d;
@@ -25,11 +27,14 @@ PixelDefects scan(std::vector<float>& values, bool clamp_negative) {
 }  // namespace
 
 PixelDefects count_defects(const Image& image) {
-    return scan<false>(const_cast<std::vector<float>&>(image.pixels), false);
+    return scan(image.pixels, [](std::size_t, bool) {});
 }
 
 PixelDefects sanitize(Image& image, bool clamp_negative) {
-    return scan<true>(image.pixels, clamp_negative);
+    return scan(image.pixels, [&](std::size_t i, bool negative) {
+        if (!negative || clamp_negative)
+            image.pixels[i] = 0.0f;
+    });
 }
 
 }  // namespace penumbra
