@@ -1,10 +1,14 @@
 #!/usr/bin/env python3
 """Runs the C++ per-frame timing benchmark of the light-rig pipeline
-(bench/cpp/lights_bench.cpp) and writes docs/lights-timing.md, then measures
-a 16384x8192 map: time and peak RSS of the streamed read against reading the
+(bench/cpp/lights_bench.cpp) and writes docs/lights-timing.md, then the
+angular-region culling section (brute-force irradiance against the region
+table, `penumbra_lights_bench --regions`), then measures a 16384x8192 map: time and peak RSS of the streamed read against reading the
 whole file first (one process each), and of bpy.ops.penumbra.build_light_rig
 in the bpy module. The 16k EXR is made from a bundled HDRI (bilinear
-upsampling) in a temporary folder and deleted afterwards."""
+upsampling) in a temporary folder and deleted afterwards.
+
+--only-regions re-runs just the culling section, --only-16k just the 16k
+one; each replaces its own section of the existing file."""
 
 import os
 import shutil
@@ -106,26 +110,43 @@ def run_16k(exe, tmp):
     return "\n".join(md) + "\n"
 
 
+def replace_section(text, marker, section):
+    """Replaces the section starting at `marker` (up to the next "## " heading)
+    with `section`, or appends it when absent."""
+    if marker in text:
+        start = text.index(marker)
+        end = text.find("\n## ", start + len(marker))
+        end = len(text) if end < 0 else end
+        return text[:start].rstrip("\n") + "\n" + section + text[end:]
+    return text.rstrip("\n") + "\n" + section
+
+
 def main():
     exe = os.path.join(ROOT, "build", "bench", "penumbra_lights_bench")
     if not os.path.exists(exe):
         sys.exit("build/bench/penumbra_lights_bench is missing; run `make build`")
-    if "--only-16k" not in sys.argv:
+    only_regions, only_16k = "--only-regions" in sys.argv, "--only-16k" in sys.argv
+    if not only_regions and not only_16k:
         rc = subprocess.run([exe, WORLD, OUT], cwd=ROOT).returncode
         if rc:
             sys.exit(rc)
-    tmp = tempfile.mkdtemp(prefix="penumbra_lights_16k_")
-    try:
-        section = run_16k(exe, tmp)
-    finally:
-        shutil.rmtree(tmp, ignore_errors=True)
-    with open(OUT) as f:
-        text = f.read()
-    marker = "\n## A 16384x8192 map"
-    if marker in text:
-        text = text[:text.index(marker)].rstrip("\n") + "\n"
-    with open(OUT, "w") as f:
-        f.write(text + section)
+    if not only_16k:
+        regions = subprocess.run([exe, "--regions", WORLD], check=True, capture_output=True, text=True).stdout
+        print(regions)
+        with open(OUT) as f:
+            text = f.read()
+        with open(OUT, "w") as f:
+            f.write(replace_section(text, "\n## Angular-region culling", regions))
+    if not only_regions:
+        tmp = tempfile.mkdtemp(prefix="penumbra_lights_16k_")
+        try:
+            section = run_16k(exe, tmp)
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+        with open(OUT) as f:
+            text = f.read()
+        with open(OUT, "w") as f:
+            f.write(replace_section(text, "\n## A 16384x8192 map", section))
     print("wrote", OUT)
 
 

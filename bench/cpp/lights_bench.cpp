@@ -9,14 +9,20 @@
 // measurement so each peak RSS is its own):
 //   penumbra_lights_bench --make-16k world.exr out.exr   bilinear 16384x8192 half EXR, written by scanlines
 //   penumbra_lights_bench --read-16k file.exr stream|whole   64-light rig; prints "ms_read ms_total peak_rss_mb"
+// Angular-region culling (paper §4.1), also driven by bench/bench_lights_timing.py:
+//   penumbra_lights_bench --regions world.exr   prints a markdown section: brute force vs the region table
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <random>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <sys/resource.h>
 
@@ -24,6 +30,7 @@
 
 #include "image/frame_source.hpp"
 #include "image/image_io.hpp"
+#include "lights/angular_regions.hpp"
 #include "lights/clustering.hpp"
 #include "lights/lights.hpp"
 #include "lights/map_reader.hpp"
@@ -125,11 +132,162 @@ int read_16k(const std::string& path, const std::string& mode) {
     return 0;
 }
 
+template <class F>
+double median_ms(int repeats, F&& f) {
+    std::vector<double> t;
+    for (int i = 0; i < repeats; ++i) {
+        const auto t0 = Clock::now();
+        f();
+        t.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    }
+    std::sort(t.begin(), t.end());
+    return t[t.size() / 2];
+}
+
+// A truncated Phong lobe around reflection directions r: Σ_k w(r·d_k) rgb_k,
+// w(c) = c^20 for c ≥ cos(lobe half-angle), else 0 (c^20 by multiplications:
+// std::pow would cost more than the loop being culled). Brute force visits
+// every light; the culled version only the lights of r's region (ascending
+// indices, so the sums are the same, term for term).
+inline double phong20(double c) {
+    const double c2 = c * c, c4 = c2 * c2, c16 = (c4 * c4) * (c4 * c4);
+    return c16 * c4;
+}
+
+Eigen::MatrixXd glossy_brute(const std::vector<Light>& lights, const std::vector<Eigen::Vector3d>& dirs,
+                             double cos_lobe) {
+    Eigen::MatrixXd e = Eigen::MatrixXd::Zero(Eigen::Index(dirs.size()), 3);
+    for (std::size_t i = 0; i < dirs.size(); ++i) {
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (const Light& l : lights) {
+            const double c = dirs[i].dot(l.direction);
+            if (c >= cos_lobe) sum += phong20(c) * l.rgb;
+        }
+        e.row(Eigen::Index(i)) = sum.transpose();
+    }
+    return e;
+}
+
+Eigen::MatrixXd glossy_culled(const AngularRegionTable& table, const std::vector<Light>& lights,
+                              const std::vector<Eigen::Vector3d>& dirs, double cos_lobe,
+                              std::size_t* visited) {
+    Eigen::MatrixXd e = Eigen::MatrixXd::Zero(Eigen::Index(dirs.size()), 3);
+    std::size_t visits = 0;
+    for (std::size_t i = 0; i < dirs.size(); ++i) {
+        const int region = table.region_of(dirs[i]);
+        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+        for (const int* k = table.begin(region); k != table.end(region); ++k) {
+            const Light& l = lights[*k];
+            const double c = dirs[i].dot(l.direction);
+            if (c >= cos_lobe) sum += phong20(c) * l.rgb;
+        }
+        visits += std::size_t(table.end(region) - table.begin(region));
+        e.row(Eigen::Index(i)) = sum.transpose();
+    }
+    if (visited) *visited = visits;
+    return e;
+}
+
+// Brute force (lights::irradiance, every light per normal) against
+// irradiance_culled through an AngularRegionTable, one thread, for rigs of
+// N lights from `world`; and the same for a 30° glossy lobe. Prints markdown.
+int regions_bench(const std::string& world) {
+    const int normal_count = 100000, repeats = 5;
+    const double lobe_deg = 30.0;
+    const double pi = 3.141592653589793, lobe = lobe_deg * pi / 180.0, cos_lobe = std::cos(lobe);
+    std::mt19937 rng(7);
+    std::normal_distribution<double> gauss(0.0, 1.0);
+    std::vector<Eigen::Vector3d> normals(normal_count);
+    for (auto& n : normals) n = Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
+    MapOptions mo;
+    mo.max_width = 1024;
+    mo.threads = 1;
+    const EnvironmentMap map = make_environment(read_image(world), mo);
+    const LuminanceDistribution dist = luminance_distribution(map, rec709_luminance, 1);
+    const auto sampler = make_sampler(SamplerKind::havran, dist);
+    std::ostringstream md;
+    md << "\n## Angular-region culling (paper §4.1)\n\n"
+       << "Written by `build/bench/penumbra_lights_bench --regions` (`bench/bench_lights_timing.py --only-regions` "
+          "re-runs just this section). Rigs of N lights from `"
+       << std::filesystem::path(world).filename().string()
+       << "` (working map 1024 wide, Havran sampling, region powers: the add-on's defaults), " << normal_count
+       << " uniformly random unit directions, one thread, median of " << repeats
+       << " runs in milliseconds for all directions. `brute` visits every light per direction; `culled` only the "
+          "lights of the direction's cube-map region (`AngularRegionTable`, g cells per face edge, 6g² regions), "
+          "the table built once per rig (`build`, timed apart, median of "
+       << repeats << "). `visited` = light visits / (directions × N). `max |diff|` compares the two results "
+          "(the culled sum skips only zero terms, in the same order). Diffuse = `lights::irradiance` vs "
+          "`irradiance_culled` (table lobe 90°); glossy = a truncated Phong lobe c^20"
+       << " for c = r·d ≥ cos " << int(lobe_deg) << "° around reflection directions r, evaluated in the benchmark "
+          "both ways (table lobe " << int(lobe_deg) << "°). Machine: 2 cores, shared.\n\n"
+       << "| lobe | N | g | build (ms) | brute (ms) | culled (ms) | speedup | visited | max \\|diff\\| |\n"
+       << "|---|---|---|---|---|---|---|---|---|\n";
+    struct Summary { double ratio, visited, brute_ns, culled_ns; };
+    std::vector<Summary> last;  // the N = 1024 rows
+    for (const int count : {64, 300, 1024}) {
+        last.clear();
+        LightOptions lo;
+        lo.count = count;
+        lo.threads = 1;
+        const std::vector<Light> lights = compute_lights(map, dist, *sampler, lo).lights;
+        std::vector<Eigen::Vector3d> dirs;
+        for (const Light& l : lights) dirs.push_back(l.direction);
+        struct Row { bool glossy; int g; };
+        for (const Row row : {Row{false, 6}, Row{true, 6}, Row{true, 12}}) {
+            const double table_lobe = row.glossy ? lobe : pi / 2;
+            const double build = median_ms(repeats, [&] { AngularRegionTable t(dirs, row.g, table_lobe); });
+            const AngularRegionTable table(dirs, row.g, table_lobe);
+            Eigen::MatrixXd a, b;
+            std::size_t visits = 0;
+            double brute, culled;
+            if (row.glossy) {
+                brute = median_ms(repeats, [&] { a = glossy_brute(lights, normals, cos_lobe); });
+                culled = median_ms(repeats, [&] { b = glossy_culled(table, lights, normals, cos_lobe, &visits); });
+            } else {
+                brute = median_ms(repeats, [&] { a = irradiance(lights, normals); });
+                culled = median_ms(repeats, [&] { b = irradiance_culled(table, lights, normals, &visits); });
+            }
+            const double diff = (a - b).cwiseAbs().maxCoeff();
+            const double visited = double(visits) / (double(normals.size()) * double(lights.size()));
+            last.push_back({brute / culled, visited, 1e6 * brute / (double(normals.size()) * double(lights.size())),
+                            1e6 * culled / double(visits)});
+            char line[512];
+            std::snprintf(line, sizeof line, "| %s | %d | %d | %.2f | %.1f | %.1f | %.2fx | %.1f%% | %.1e |\n",
+                          row.glossy ? "glossy 30°" : "diffuse", count, row.g, build, brute, culled, brute / culled,
+                          100.0 * visited, diff);
+            md << line;
+            std::fprintf(stderr, "%s", line);
+        }
+    }
+    const double in_lobe = (1 - cos_lobe) / 2;  // fraction of uniform directions within the lobe
+    const Summary& d = last.at(0);
+    const Summary& g6 = last.at(1);
+    const Summary& g12 = last.at(2);
+    char text[2048];
+    std::snprintf(text, sizeof text,
+                  "\nAt N = 1024 the diffuse table visits %.0f%% of the lights and brute force takes %.2fx the "
+                  "time of the culled sum (1/visited = %.2fx; %.1f ns per light brute, %.1f ns per visited light "
+                  "culled). The 30° glossy lobe visits far fewer lights (%.0f%% at g = 6, %.0f%% at g = 12) but "
+                  "gains less than 1/visited (%.2fx and %.2fx): brute force rejects a light outside the lobe with "
+                  "one dot product and a rarely-taken branch (%.1f ns per light), while each light the table "
+                  "visits costs %.1f / %.1f ns (an indirect look-up, and the in-lobe test no longer predictable: "
+                  "%.0f%% / %.0f%% of the visited lights pass it). At N = 64 "
+                  "the per-direction work dominates and culling gains little. The table takes at most a few "
+                  "milliseconds to build, once per frame.\n",
+                  100 * d.visited, d.ratio, 1 / d.visited, d.brute_ns, d.culled_ns, 100 * g6.visited,
+                  100 * g12.visited, g6.ratio, g12.ratio, g6.brute_ns, g6.culled_ns, g12.culled_ns,
+                  100 * in_lobe / g6.visited, 100 * in_lobe / g12.visited);
+    md << text;
+    std::printf("%s", md.str().c_str());
+    return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
     if (argc == 4 && std::string(argv[1]) == "--make-16k") return make_16k(argv[2], argv[3]);
     if (argc == 4 && std::string(argv[1]) == "--read-16k") return read_16k(argv[2], argv[3]);
+    if (argc == 3 && std::string(argv[1]) == "--regions") return regions_bench(argv[2]);
     const std::string world = argc > 1 ? argv[1] : "/usr/share/blender/datafiles/studiolights/world/forest.exr";
     const std::string out_path = argc > 2 ? argv[2] : "docs/lights-timing.md";
     const Image source = read_image(world);
