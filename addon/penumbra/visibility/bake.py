@@ -305,9 +305,12 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
 
     frame_start: bpy.props.IntProperty(name="Start", default=-1, description="First frame (-1: the object's setting)")
     frame_end: bpy.props.IntProperty(name="End", default=-1, description="Last frame (-1: the object's setting)")
-    frame_step: bpy.props.IntProperty(name="Step", default=0, min=0, description="Step (0: the object's setting)")
-    rays: bpy.props.IntProperty(name="Rays", default=0, min=0, max=65536, description="Rays per vertex (0: the object's setting)")
-    lobes: bpy.props.IntProperty(name="Lobes", default=0, min=0, max=4, description="ZH lobes (0: the object's setting)")
+    # Step, rays and lobes show their documented defaults; when a caller does
+    # not set them, the object's own settings (same defaults) are used.
+    frame_step: bpy.props.IntProperty(name="Step", default=1, min=1, description="Frame step (unset: the object's setting)")
+    rays: bpy.props.IntProperty(name="Rays", default=256, min=16, max=65536,
+                                description="Rays per vertex (unset: the object's setting)")
+    lobes: bpy.props.IntProperty(name="Lobes", default=2, min=1, max=4, description="ZH lobes (unset: the object's setting)")
     sh_order: bpy.props.IntProperty(name="SH Order", default=4, min=2, max=8)
     occluders: bpy.props.StringProperty(name="Occluders", default="",
                                         description="Collection of other shadowing objects (empty: the object's setting)")
@@ -326,6 +329,9 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
         return context.active_object is not None and context.active_object.type == "MESH"
 
     # Settings ------------------------------------------------------------------
+    def _given(self, name, settings):
+        return getattr(self, name) if self.properties.is_property_set(name) else getattr(settings, name)
+
     def _resolved(self, context):
         obj = context.active_object
         s = obj.penumbra_visibility
@@ -350,9 +356,9 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
             actions=actions,
             frame_start=self.frame_start if self.frame_start >= 0 else s.frame_start,
             frame_end=self.frame_end if self.frame_end >= 0 else s.frame_end,
-            frame_step=self.frame_step or s.frame_step,
-            rays=self.rays or s.rays,
-            lobes=self.lobes or s.lobes,
+            frame_step=self._given("frame_step", s),
+            rays=self._given("rays", s),
+            lobes=self._given("lobes", s),
             sh_order=self.sh_order,
             occluders=occluders,
             path=resolve_path(self.filepath or s.filepath, obj),
