@@ -34,14 +34,6 @@ Y = np.array([0.2126, 0.7152, 0.0722])
 COUNTS = (4, 16, 64, 256, 1024)
 
 
-def fibonacci(n):
-    i = np.arange(n) + 0.5
-    z = 1 - 2 * i / n
-    phi = i * math.pi * (3 - math.sqrt(5))
-    r = np.sqrt(1 - z * z)
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
-
-
 def rel_rmse(e, ref):
     d = (e - ref) @ Y
     r = ref @ Y
@@ -157,7 +149,9 @@ def flicker_of(sequence, normals, rig_kind, fps):
 SHADOW_SCRIPT = r"""
 import json, math, os, sys, traceback
 sys.path.insert(0, sys.argv[1])
+sys.path.insert(0, sys.argv[5])
 import bpy
+import light_rig_scene
 import numpy as np
 try:
     import penumbra
@@ -175,14 +169,7 @@ try:
     env = nt.nodes.new("ShaderNodeTexEnvironment")
     env.image = bpy.data.images.load(hdri)
     nt.links.new(env.outputs["Color"], nt.nodes["Background"].inputs["Color"])
-    bpy.ops.mesh.primitive_plane_add(size=6)
-    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.7, location=(0, 0, 0.7))
-    bpy.ops.object.shade_smooth()
-    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    cam.location = (4.5, -4.5, 3.2)
-    cam.rotation_euler = (math.radians(65), 0, math.radians(45))
-    scene.collection.objects.link(cam)
-    scene.camera = cam
+    light_rig_scene.sphere_on_plane(scene)
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.samples = spp
@@ -241,7 +228,8 @@ def shadowed_comparison():
         with open(script, "w") as f:
             f.write(SHADOW_SCRIPT)
         res = subprocess.run([python, script, os.path.join(ROOT, "build", "addon"), tmp,
-                              ",".join(str(n) for n in SHADOW_COUNTS), str(SHADOW_SPP)],
+                              ",".join(str(n) for n in SHADOW_COUNTS), str(SHADOW_SPP),
+                              os.path.join(ROOT, "examples")],
                              capture_output=True, text=True, timeout=1200)
         line = [x for x in res.stdout.splitlines() if x.startswith("RESULT ")]
         if res.returncode != 0 or not line:
@@ -254,7 +242,7 @@ def main():
     started = time.time()
     shadows = shadowed_comparison()
     print("shadowed comparison:", shadows, flush=True)
-    normals = fibonacci(1000)
+    normals = _penumbra.fibonacci_directions(1000)
     maps = []
     for name in data.WORLDS:
         image = np.maximum(data.load_world(name), 0)  # 1024x512; negatives clamped as the tool does
@@ -272,7 +260,7 @@ def main():
         "100 Hz lamp flicker at 22 fps (aliased to 10 Hz) + 2% noise":
             (data.noisy(data.flicker_frames(forest, 40, 22.0, 0.2), 0.02), 22.0),
     }
-    fnormals = fibonacci(200)
+    fnormals = _penumbra.fibonacci_directions(200)
     flicker = {}
     for name, (seq, fps) in sequences.items():
         flicker[name] = {k: flicker_of(seq, fnormals, k, fps)

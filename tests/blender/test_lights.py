@@ -105,14 +105,6 @@ def _world_with(scene, path, rotation_z=None):
     return world
 
 
-def _fibonacci(n):
-    i = np.arange(n) + 0.5
-    z = 1 - 2 * i / n
-    phi = i * math.pi * (3 - math.sqrt(5))
-    r = np.sqrt(1 - z * z)
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
-
-
 def test_rig_reproduces_the_maps_irradiance_and_is_updated_not_duplicated(addon, tmp_path):
     scene = addon
     img = _sky_and_sun()
@@ -123,7 +115,7 @@ def test_rig_reproduces_the_maps_irradiance_and_is_updated_not_duplicated(addon,
     suns = [o for o in coll.objects if o.type == "LIGHT"]
     assert len(suns) == 64 and all(o.data.type == "SUN" for o in suns)
     assert sum(1 for o in coll.objects if o.type == "EMPTY") == 1
-    normals = _fibonacci(200)
+    normals = _core().fibonacci_directions(200)
     ref = _map_irradiance(img, normals)
     got = _rig_irradiance(scene, normals)
     y = np.array([0.2126, 0.7152, 0.0722])

@@ -28,17 +28,9 @@ def numpy_irradiance(image, normals):
     return cos @ flux
 
 
-def fibonacci(n):
-    i = np.arange(n) + 0.5
-    z = 1 - 2 * i / n
-    phi = i * math.pi * (3 - math.sqrt(5))
-    r = np.sqrt(1 - z * z)
-    return np.stack([r * np.cos(phi), r * np.sin(phi), z], axis=1)
-
-
 def test_region_lights_reproduce_numpy_irradiance_of_a_bundled_world():
     image = videos.load_world("forest", 256)
-    normals = fibonacci(300)
+    normals = _penumbra.fibonacci_directions(300)
     reference = numpy_irradiance(np.maximum(image, 0), normals)
     errors = {}
     for n in (16, 64, 256):
@@ -52,7 +44,7 @@ def test_region_lights_reproduce_numpy_irradiance_of_a_bundled_world():
 
 def test_exact_irradiance_binding_agrees_with_numpy():
     image = videos.sun_disc(64, 128, (0.3, 0.2, 0.9), 0.2, 50.0, sky_radiance=0.5)
-    normals = fibonacci(40)
+    normals = _penumbra.fibonacci_directions(40)
     ours = _penumbra.light_rig_exact_irradiance(image, normals)
     np.testing.assert_allclose(ours, numpy_irradiance(image, normals), rtol=1e-6, atol=1e-9)
 
@@ -60,7 +52,7 @@ def test_exact_irradiance_binding_agrees_with_numpy():
 def test_uniform_sky_gives_pi_times_radiance():
     lights = _penumbra.light_rig_lights(videos.sky(64, 128, 2.0), count=128)
     np.testing.assert_allclose(lights["rgb"].sum(axis=0), 4 * math.pi * 2.0, rtol=1e-6)
-    e = _penumbra.light_rig_irradiance(lights["directions"], lights["rgb"], fibonacci(100))
+    e = _penumbra.light_rig_irradiance(lights["directions"], lights["rgb"], _penumbra.fibonacci_directions(100))
     assert abs(e[:, 0].mean() / (2 * math.pi) - 1) < 0.02
 
 
@@ -172,7 +164,7 @@ def test_clustering_and_region_tables_through_the_bindings():
     np.testing.assert_allclose(c["rgb"].sum(axis=0), lights["rgb"].sum(axis=0), rtol=1e-9)
     table = _penumbra.light_rig_region_table(lights["directions"], 6)
     assert len(table["offsets"]) == 217
-    normals = fibonacci(50)
+    normals = _penumbra.fibonacci_directions(50)
     regions = _penumbra.light_rig_region_of(normals, 6)
     for n, r in zip(normals, regions):
         members = set(table["lights"][table["offsets"][r]:table["offsets"][r + 1]])
