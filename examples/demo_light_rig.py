@@ -7,12 +7,16 @@ a sphere on a plane lit by the World and by the rig."""
 
 import math
 import os
+import sys
 import time
 
 import bpy
 import numpy as np
 
 from penumbra import color, native
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import light_rig_scene  # noqa: E402  (examples/light_rig_scene.py)
 
 
 def _render(scene, path):
@@ -50,14 +54,7 @@ def run(out_folder):
     nt.links.new(env.outputs["Color"], nt.nodes["Background"].inputs["Color"])
 
     # A sphere on a plane, seen by a camera.
-    bpy.ops.mesh.primitive_plane_add(size=6)
-    bpy.ops.mesh.primitive_uv_sphere_add(radius=0.7, location=(0, 0, 0.7))
-    bpy.ops.object.shade_smooth()
-    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    cam.location = (4.5, -4.5, 3.2)
-    cam.rotation_euler = (math.radians(65), 0, math.radians(45))
-    scene.collection.objects.link(cam)
-    scene.camera = cam
+    light_rig_scene.sphere_on_plane(scene)
     _render(scene, os.path.join(out_folder, "render_world.png"))
 
     # Static rig from the World (filepath empty), 64 lights.
