@@ -20,7 +20,8 @@ def noise_ramp_plane(plane_size=400.0, plane_location=(0.0, 190.0, 0.0),
     bpy.ops.mesh.primitive_plane_add(size=plane_size, location=plane_location)
     plane = bpy.context.active_object
     material = bpy.data.materials.new("noise ramp")
-    material.use_nodes = True
+    if bpy.app.version < (5, 0, 0):  # 5.0+: always node-based, use_nodes is deprecated
+        material.use_nodes = True
     tree = material.node_tree
     tree.nodes.remove(tree.nodes["Principled BSDF"])
     emission = tree.nodes.new("ShaderNodeEmission")

@@ -42,7 +42,8 @@ def run(out_folder):
     # World: the HDRI through a Mapping node turned 30° about Z.
     world = bpy.data.worlds.new("Demo World")
     scene.world = world
-    world.use_nodes = True
+    if bpy.app.version < (5, 0, 0):  # 5.0+: always node-based, use_nodes is deprecated
+        world.use_nodes = True
     nt = world.node_tree
     env = nt.nodes.new("ShaderNodeTexEnvironment")
     env.image = bpy.data.images.load(hdri)

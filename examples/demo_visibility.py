@@ -18,7 +18,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 def _world(scene, name="forest.exr"):
     path = os.path.join(bpy.utils.system_resource("DATAFILES"), "studiolights", "world", name)
     world = bpy.data.worlds.new("Demo World")
-    world.use_nodes = True
+    if bpy.app.version < (5, 0, 0):  # 5.0+: always node-based, use_nodes is deprecated
+        world.use_nodes = True
     tree = world.node_tree
     env = tree.nodes.new("ShaderNodeTexEnvironment")
     env.image = bpy.data.images.load(path)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import penumbra
-from penumbra import native
+from penumbra import compat, native
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "examples"))
 import colormap_scene  # noqa: E402  (the scene users can copy, examples/colormap_scene.py)
@@ -32,8 +32,7 @@ def addon(factory_scene):
 
 def make_ramp_material(name="ramped", noise=True):
     material = bpy.data.materials.new(name)
-    material.use_nodes = True
-    tree = material.node_tree
+    tree = compat.ensure_nodes(material)
     ramp = tree.nodes.new("ShaderNodeValToRGB")
     elements = ramp.color_ramp.elements
     elements[0].color = (0.9, 0.1, 0.05, 1.0)
@@ -207,6 +206,17 @@ def test_bad_input_is_reported_and_nothing_changes(addon, problem):
     if problem == "not_a_ramp":
         tree.nodes.active = tree.nodes["Principled BSDF"]
     elif problem == "no_nodes":
+        if bpy.app.version >= (5, 0, 0):
+            # Blender 5.0 made every material node-based: Material.use_nodes is
+            # deprecated, always True, and setting it does nothing (5.0 Python
+            # API release notes, "Shading", PR #141278). The ramp is what Blender
+            # renders, so there is nothing to refuse: the bake goes ahead.
+            with pytest.warns(DeprecationWarning):
+                material.use_nodes = False
+            assert compat.uses_nodes(material)
+            assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
+            assert ramp.mute and tree.nodes.active.name == node_groups.FILTERED_RAMP
+            return
         material.use_nodes = False
     elif problem == "nan_colour":
         ramp.color_ramp.elements[0].color = (float("nan"), 0.0, 0.0, 1.0)
@@ -495,8 +505,7 @@ def _pixel_planes(scene, normals, props):
     s = 0.25
     mesh.from_pydata([(-s, -s, 0), (s, -s, 0), (s, s, 0), (-s, s, 0)], [], [(0, 1, 2, 3)])
     material = bpy.data.materials.new("probe")
-    material.use_nodes = True
-    tree = material.node_tree
+    tree = compat.ensure_nodes(material)
     for node in list(tree.nodes):
         tree.nodes.remove(node)
     emission = tree.nodes.new("ShaderNodeEmission")

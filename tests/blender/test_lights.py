@@ -31,6 +31,13 @@ def _core():
     return native.require()
 
 
+def _ensure_nodes(id_block):
+    """The node tree of a material or world (Use Nodes is switched on before
+    Blender 5.0, which made both always node-based; see penumbra/compat.py)."""
+    from penumbra import compat
+    return compat.ensure_nodes(id_block)
+
+
 def _write_map(path, image):
     _core().write_exr(path, image.astype(np.float32), half=False, colorspace="Linear")
     return path
@@ -91,8 +98,7 @@ def _rig_irradiance(scene, normals):
 def _world_with(scene, path, rotation_z=None):
     world = bpy.data.worlds.new("Test World")
     scene.world = world
-    world.use_nodes = True
-    nt = world.node_tree
+    nt = _ensure_nodes(world)
     env = nt.nodes.new("ShaderNodeTexEnvironment")
     env.image = bpy.data.images.load(path)
     nt.links.new(env.outputs["Color"], nt.nodes["Background"].inputs["Color"])
@@ -213,8 +219,7 @@ def _plane_and_camera(scene):
     bpy.ops.mesh.primitive_plane_add(size=4.0)
     plane = bpy.context.active_object
     mat = bpy.data.materials.new("White")
-    mat.use_nodes = True
-    nt = mat.node_tree
+    nt = _ensure_nodes(mat)
     for n in list(nt.nodes):
         if n.type != "OUTPUT_MATERIAL":
             nt.nodes.remove(n)
@@ -234,8 +239,7 @@ def _plane_and_camera(scene):
 
 def _black_world(scene):
     black = bpy.data.worlds.new("Black")
-    black.use_nodes = True
-    black.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    _ensure_nodes(black).nodes["Background"].inputs["Strength"].default_value = 0.0
     scene.world = black
 
 

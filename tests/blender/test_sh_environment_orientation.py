@@ -15,7 +15,7 @@ import bpy
 import numpy as np
 import pytest
 
-from penumbra import native
+from penumbra import compat, native
 
 _penumbra = native.require()
 
@@ -64,8 +64,7 @@ def bake_world_lighting(image_path, samples):
     scene.cycles.max_bounces = 0
 
     world = bpy.data.worlds.new("probe")
-    world.use_nodes = True
-    nodes = world.node_tree.nodes
+    nodes = compat.ensure_nodes(world).nodes
     env = nodes.new("ShaderNodeTexEnvironment")
     env.image = bpy.data.images.load(image_path)
     env.image.colorspace_settings.name = _linear_name()
@@ -77,8 +76,7 @@ def bake_world_lighting(image_path, samples):
     sphere = bpy.context.active_object
     bpy.ops.object.shade_smooth()
     material = bpy.data.materials.new("white")
-    material.use_nodes = True
-    material.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (1, 1, 1, 1)
+    compat.ensure_nodes(material).nodes["Principled BSDF"].inputs["Base Color"].default_value = (1, 1, 1, 1)
     sphere.data.materials.append(material)
     attribute = sphere.data.color_attributes.new("light", "FLOAT_COLOR", "POINT")
     sphere.data.color_attributes.active_color = attribute

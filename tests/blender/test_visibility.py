@@ -16,7 +16,7 @@ from mathutils import Vector
 from mathutils.bvhtree import BVHTree
 
 import penumbra
-from penumbra import native
+from penumbra import compat, native
 from penumbra.visibility import bake, runtime, scene_data
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -63,8 +63,7 @@ def attribute(obj, name, width):
 
 def uniform_world(scene, rgb=(1.0, 1.0, 1.0), strength=1.0):
     world = bpy.data.worlds.new("Uniform")
-    world.use_nodes = True
-    background = world.node_tree.nodes["Background"]
+    background = compat.ensure_nodes(world).nodes["Background"]
     background.inputs["Color"].default_value = (*rgb, 1.0)
     background.inputs["Strength"].default_value = strength
     scene.world = world

@@ -17,6 +17,7 @@ import numpy as np
 
 from . import node_groups, noise_statistics, ramp as ramp_io
 from .. import color, native
+from ..compat import uses_nodes
 
 
 class BakeError(Exception):
@@ -31,7 +32,7 @@ def _editable_material(context):
     if material.library is not None:
         raise BakeError(f"Material '{material.name}' is linked from the library '{material.library.filepath}' "
                         "and is read-only: make it local first (nothing was changed)")
-    if not material.use_nodes or material.node_tree is None:
+    if not uses_nodes(material):
         raise BakeError(f"Material '{material.name}' does not use nodes: there is no ColorRamp to filter")
     return material
 

@@ -15,6 +15,7 @@ import bpy
 import mathutils
 
 from .. import color, native
+from ..compat import uses_nodes
 from . import rig_objects, settings
 
 PREVIEW_NAME = "Penumbra Light Rig Preview"
@@ -25,7 +26,7 @@ _SETTING_NAMES = ("filepath", "mapping", "colorspace", "count", "sampler", "powe
 
 def world_environment(world):
     """(image node, background strength, world_from_map 3x3 or None, vector_type) of the World."""
-    if world is None or not world.use_nodes or world.node_tree is None:
+    if not uses_nodes(world):
         return None, 1.0, None, None
     env = next((n for n in world.node_tree.nodes if n.type == "TEX_ENVIRONMENT" and n.image is not None), None)
     if env is None:

@@ -3,6 +3,7 @@ wired into the object's material so Cycles and Eevee renders show it."""
 
 import bpy
 
+from ..compat import ensure_nodes
 from .runtime import SHADING_ATTRIBUTE
 
 NODE_NAME = "Penumbra Shading"
@@ -19,8 +20,7 @@ def setup_material(obj):
         material = bpy.data.materials.new(f"{obj.name} Penumbra")
         obj.data.materials.append(material)
         obj.active_material_index = len(obj.data.materials) - 1
-    material.use_nodes = True
-    tree = material.node_tree
+    tree = ensure_nodes(material)
     attribute = tree.nodes.get(NODE_NAME)
     if attribute is None:
         attribute = tree.nodes.new("ShaderNodeAttribute")

@@ -5,6 +5,7 @@ change this mesh's occlusion, and the World lighting. No bake logic here."""
 import numpy as np
 
 from .. import native
+from ..compat import uses_nodes
 
 
 class VisibilityInputError(ValueError):
@@ -312,7 +313,7 @@ def read_world(scene):
     if world is None:
         r.note = "no World: black"
         return r
-    if not world.use_nodes or world.node_tree is None:
+    if not uses_nodes(world):  # always node-based from 5.0 (compat.py)
         r.kind, r.colour, r.note = "uniform", np.array(world.color[:3], dtype=np.float64), "World colour"
         return r
     tree = world.node_tree

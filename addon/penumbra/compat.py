@@ -1,0 +1,32 @@
+"""What differs between the Blenders Penumbra supports (Debian's 3.4, 4.2+
+and 5.x), kept in one place; each check names the version that changed it
+and why. Everything else about the bpy API Penumbra uses is the same."""
+
+import bpy
+
+# Blender 5.0 made materials and worlds node-based unconditionally:
+# `Material.use_nodes` and `World.use_nodes` are deprecated (removal planned
+# for 6.0), always read True, setting them does nothing and every access
+# raises a DeprecationWarning (5.0 Python API release notes, "Shading":
+# blender/blender PR #141278 for materials, #142342 for worlds). A new
+# material or world already has its node tree.
+ALWAYS_USES_NODES = bpy.app.version >= (5, 0, 0)
+
+
+def uses_nodes(id_block):
+    """True when a material or world is drawn by its node tree."""
+    if id_block is None or id_block.node_tree is None:
+        return False
+    if ALWAYS_USES_NODES:
+        return True
+    return bool(id_block.use_nodes)
+
+
+def ensure_nodes(id_block):
+    """Makes a material or world use its node tree and returns the tree.
+    Before 5.0 this switches Use Nodes on (which also creates the tree);
+    from 5.0 there is nothing to switch."""
+    if not ALWAYS_USES_NODES and not id_block.use_nodes:
+        id_block.use_nodes = True
+    return id_block.node_tree
+
