@@ -30,3 +30,12 @@ def ensure_nodes(id_block):
         id_block.use_nodes = True
     return id_block.node_tree
 
+
+def socket_is(socket, identifier):
+    """Compares a node socket by its identifier, not its name: Blender 5.0
+    spelled abbreviated socket names out, so the "Fac" sockets (Noise
+    Texture, ColorRamp, Mix Shader, Attribute...) are named "Factor" and
+    keep the identifier "Fac" (blender/blender PR #140498). Lookups such as
+    node.inputs["Fac"] still work (they also match identifiers); comparing
+    `socket.name` does not. Identifiers are the same in every version."""
+    return socket is not None and socket.identifier == identifier

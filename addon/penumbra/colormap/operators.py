@@ -17,7 +17,7 @@ import numpy as np
 
 from . import node_groups, noise_statistics, ramp as ramp_io
 from .. import color, native
-from ..compat import uses_nodes
+from ..compat import socket_is, uses_nodes
 
 
 class BakeError(Exception):
@@ -79,9 +79,9 @@ def _coordinate_scale(noise, obj):
         return generated, None
     socket = links[0].from_socket
     if socket.node.bl_idname == "ShaderNodeTexCoord":
-        if socket.name == "Generated":
+        if socket_is(socket, "Generated"):
             return generated, None
-        if socket.name == "Object" and socket.node.object is None and obj is not None:
+        if socket_is(socket, "Object") and socket.node.object is None and obj is not None:
             s = sorted(abs(v) for v in obj.scale)
             return 1.0 / math.sqrt(max(s[1] * s[2], 1e-12)), None
     return 1.0, (f"the noise's coordinates come from '{socket.node.name}.{socket.name}': assuming one texture "

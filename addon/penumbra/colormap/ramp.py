@@ -2,6 +2,8 @@
 
 import numpy as np
 
+from ..compat import socket_is
+
 
 def ramp_stops(node):
     """(count, 5) float32: position, r, g, b, a of each stop (scene-linear)."""
@@ -20,7 +22,7 @@ def ramp_modes(node):
 
 def driving_socket(node):
     """The output socket linked into the ramp's Fac input, or None."""
-    links = node.inputs["Fac"].links
+    links = node.inputs["Fac"].links  # "Fac" also finds 5.x's "Factor" (its identifier)
     return links[0].from_socket if links else None
 
 
@@ -30,6 +32,6 @@ def driving_noise(node):
     if socket is None:
         return None
     source = socket.node
-    if source.bl_idname == "ShaderNodeTexNoise" and socket.name == "Fac":
+    if source.bl_idname == "ShaderNodeTexNoise" and socket_is(socket, "Fac"):  # named "Factor" in 5.x
         return source
     return None
