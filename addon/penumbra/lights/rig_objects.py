@@ -81,6 +81,11 @@ def fcurve(id_block, path, index=0):
         if hasattr(anim_utils, "action_get_channelbag_for_slot"):
             bag = anim_utils.action_get_channelbag_for_slot(anim.action, slot)
             return bag.fcurves.find(path, index=index) if bag is not None else None
+    if bpy.app.version >= (5, 0, 0):
+        # Blender 5.0 removed the legacy Action.fcurves (4.5 -> 5.0 API change
+        # log, bpy.types.Action): curves live only in slot channel bags, so an
+        # ID that has an action but no slot has no F-curve.
+        return None
     return anim.action.fcurves.find(path, index=index)
 
 
