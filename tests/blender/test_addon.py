@@ -122,6 +122,25 @@ def test_core_conversion_matches_blenders_own_colour_management():
     np.testing.assert_allclose(ours, blenders, atol=1e-3)
 
 
+def test_conversion_to_the_working_space_matches_blenders_own(factory_scene):
+    """Scene linear is what Blender renders in. Blender 5.0 made it a setting
+    of each file, the working space (Linear Rec.709, Linear Rec.2020 or
+    ACEScg); before, it is the config's scene_linear role. In every working
+    space the file can have, the core converts sRGB to it as Blender does."""
+    from mathutils import Color
+    from penumbra import color
+    config = color.blender_config()
+    srgb = np.array([[0.9, 0.1, 0.05], [0.05, 0.2, 0.9], [0.3, 0.8, 0.2], [0.5, 0.5, 0.5]], np.float32)
+    spaces = ["Linear Rec.709", "Linear Rec.2020", "ACEScg"] if bpy.app.version >= (5, 0, 0) else [None]
+    for space in spaces:
+        if space is not None and space != bpy.data.colorspace.working_space:
+            assert bpy.ops.wm.set_working_color_space(working_space=space) == {"FINISHED"}
+        assert color.working_space(config) == (space or config.scene_linear)
+        ours = color.to_working_space(config, srgb[None], "sRGB")[0]
+        blenders = [tuple(Color(tuple(map(float, c))).from_srgb_to_scene_linear()) for c in srgb]
+        np.testing.assert_allclose(ours, blenders, atol=1e-3, err_msg=str(space))
+
+
 def mapped_libraries():
     maps = open("/proc/self/maps").read().splitlines()
     return sorted({line.split()[-1] for line in maps if ".so" in line and line.split()[-1].startswith("/")})

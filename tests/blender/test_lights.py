@@ -158,6 +158,73 @@ def test_world_mapping_rotation_is_honoured(addon, tmp_path):
     assert np.dot(np.array(d), expected) > math.cos(0.1)
 
 
+def _clear_images():
+    for image in list(bpy.data.images):
+        bpy.data.images.remove(image)
+
+
+def _suns_rgb(scene):
+    """∫L dω of each sun, by light index."""
+    suns = sorted((o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"),
+                  key=lambda o: o["penumbra_light_index"])
+    return np.array([_sun_rgb(o) for o in suns])
+
+
+def test_rig_colours_are_in_the_files_working_space(addon, tmp_path):
+    """Light colours are read by Blender in its scene-linear space. Before 5.0
+    that is the config's scene_linear role; Blender 5.0 made it a setting of
+    each file (the working space: Linear Rec.709, Linear Rec.2020 or ACEScg),
+    so a rig built in an ACEScg file holds the same light in ACEScg."""
+    from penumbra import color
+    scene = addon
+    config = color.blender_config()
+    img = _sky_and_sun()
+    img[..., 0] *= 0.6  # a colour that differs between the spaces
+    path = _write_map(str(tmp_path / "map.exr"), img)
+    json_path = str(tmp_path / "rig.json")
+    assert bpy.ops.penumbra.build_light_rig(filepath=path, colorspace=config.scene_linear, count=16,
+                                            json_path=json_path) == {"FINISHED"}
+    assert color.working_space(config) == config.scene_linear  # a new file: the default working space
+    assert json.load(open(json_path))["colorspace"] == config.scene_linear
+    default = _suns_rgb(scene)
+    total = (img * _solid_angles(*img.shape[:2])[:, None, None]).sum(axis=(0, 1))
+    np.testing.assert_allclose(default.sum(axis=0), total, rtol=1e-4)
+    if bpy.app.version < (5, 0, 0):
+        return  # one scene-linear space per config: nothing else to compare
+    _clear_images()  # Blender refuses to change the working space while an image is unsaved
+    assert bpy.ops.wm.set_working_color_space(working_space="ACEScg") == {"FINISHED"}
+    assert color.working_space(config) == "ACEScg"
+    assert bpy.ops.penumbra.build_light_rig(filepath=path, colorspace=config.scene_linear, count=16,
+                                            json_path=json_path) == {"FINISHED"}
+    assert json.load(open(json_path))["colorspace"] == "ACEScg"
+    expected = config.convert(default[None].astype(np.float32), config.scene_linear, "ACEScg")[0]
+    np.testing.assert_allclose(_suns_rgb(scene), expected, rtol=1e-4, atol=1e-6)
+
+
+def test_a_packed_float_world_gives_the_rig_its_file_gives(addon, tmp_path):
+    """Blender keeps a float image's pixels in the working space (5.x converts
+    a float file to it on load, whatever the image's colour space says), so a
+    packed World image must give the rig its file gives, in every working
+    space."""
+    scene = addon
+    img = _sky_and_sun()
+    img[..., 0] *= 0.6
+    path = _write_map(str(tmp_path / "map.exr"), img)
+    spaces = ["Linear Rec.709", "ACEScg"] if bpy.app.version >= (5, 0, 0) else [None]
+    for space in spaces:
+        if space is not None and space != bpy.data.colorspace.working_space:
+            _clear_images()  # Blender refuses to change the working space while an image is unsaved
+            assert bpy.ops.wm.set_working_color_space(working_space=space) == {"FINISHED"}
+        world = _world_with(scene, path)
+        image = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeTexEnvironment").image
+        assert bpy.ops.penumbra.build_light_rig(count=16, json_path=str(tmp_path / "f.json")) == {"FINISHED"}
+        from_file = _suns_rgb(scene)
+        image.pack()
+        assert image.packed_file is not None
+        assert bpy.ops.penumbra.build_light_rig(count=16, json_path=str(tmp_path / "p.json")) == {"FINISHED"}
+        np.testing.assert_allclose(_suns_rgb(scene), from_file, rtol=1e-4, atol=1e-6, err_msg=str(space))
+
+
 def test_sequence_gives_linear_keyframes_without_flips(addon, tmp_path):
     scene = addon
     core = _core()

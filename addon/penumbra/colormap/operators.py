@@ -126,8 +126,10 @@ class BakePlan:
         row = pixels.reshape(height, width, 4)[height // 2]  # the middle row is the colour map
         rgb = row[:, :3]
         space = image.colorspace_settings.name
-        if not image.is_float and space not in ("Non-Color", "Linear", "Linear Rec.709", "Raw"):
-            rgb = color.blender_config().to_scene_linear(rgb[None, :, :].copy(), space)[0]
+        if not image.is_float and space not in ("Non-Color", "Raw"):
+            # Byte pixels hold the image's encoding; ramp colours are in the
+            # scene-linear working space (per file from Blender 5.0).
+            rgb = color.to_working_space(color.blender_config(), rgb[None, :, :].copy(), space)[0]
         self.image = image
         self.samples = np.concatenate([rgb, row[:, 3:4]], axis=1).astype(np.float32)
         if not np.isfinite(self.samples).all():

@@ -13,6 +13,7 @@ import tempfile
 
 import bpy
 import mathutils
+import numpy as np
 
 from .. import color, native
 from ..compat import uses_nodes
@@ -62,17 +63,25 @@ class _Job:
         world_from_map = None
         path = bpy.path.abspath(op.filepath) if op.filepath else ""
         colorspace = op.colorspace
+        self.config = color.blender_config()
+        # Scene-linear in this file: light colours are read in it (per file
+        # from Blender 5.0; see color.working_space).
+        self.working = color.working_space(self.config)
         if not path:
             env, self.strength, world_from_map, _ = world_environment(self.scene.world)
             if env is None:
                 raise ValueError("no source file given and the World has no Environment Texture with an image")
             image = env.image
+            packed = not (image.packed_file is None and image.source in {"FILE", "SEQUENCE", "MOVIE"})
             if not colorspace:
-                colorspace = image.colorspace_settings.name
-            if image.packed_file is None and image.source in {"FILE", "SEQUENCE", "MOVIE"}:
+                # A file is read in its own colour space. Blender keeps a float
+                # image's pixels in the working space (Blender 5.x converts a
+                # float file to it on load whatever the image's colour space
+                # says); byte pixels hold the image's encoding.
+                colorspace = self.working if packed and image.is_float else image.colorspace_settings.name
+            if not packed:
                 path = bpy.path.abspath(image.filepath, library=image.library)
             else:
-                import numpy as np
                 w, h = image.size
                 if w == 0 or h == 0:
                     raise ValueError(f"the World's image '{image.name}' has no pixels")
@@ -80,7 +89,6 @@ class _Job:
                 image.pixels.foreach_get(px)
                 self.array = px.reshape(h, w, 4)[::-1, :, :3].copy()  # Blender rows are bottom-up
         self.path = path
-        self.config = color.blender_config()
         self.colorspace = colorspace or ""
         if self.colorspace and not self.config.has_colorspace(self.colorspace):
             names = ", ".join(self.config.colorspace_names())
@@ -120,6 +128,13 @@ class _Job:
 
     def apply(self):
         rig = self.builder.finish(self.fps)
+        if self.colorspace and self.config.scene_linear != self.working:
+            # The core converted the source to the config's scene_linear role
+            # (Linear Rec.709); this file's working space differs (Blender 5.0+).
+            # Light colours are linear sums of pixels, so converting them is
+            # the same as converting the map.
+            rgb = np.asarray(rig["rgb"], dtype=np.float32)
+            rig["rgb"] = self.config.convert(np.ascontiguousarray(rgb), self.config.scene_linear, self.working)
         if self.strength != 1.0:
             rig["rgb"] = rig["rgb"] * self.strength
             rig["power"] = rig["power"] * self.strength
@@ -169,6 +184,7 @@ class _Job:
             "format": "penumbra-light-rig",
             "version": 1,
             "source": self.path or "World image (packed)",
+            "colorspace": self.working,
             "coordinates": "Blender world: +Z up; direction points from the scene towards the light",
             "units": "rgb = irradiance in W/m^2 on a surface facing the light, scene-linear "
                      "(a point-like Blender sun: strength = max(rgb), colour = rgb / strength)",

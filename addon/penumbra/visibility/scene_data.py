@@ -265,12 +265,14 @@ def _image_pixels_top_down(image):
         pixels = np.repeat(pixels[..., :1], 3, axis=2)
     pixels = np.ascontiguousarray(pixels[..., :3])
     if not image.is_float:
-        # Byte images hold the file's encoding; convert to scene linear with Blender's config.
+        # Byte images hold the file's encoding; convert to scene linear with
+        # Blender's config: the file's working space from Blender 5.0 on (float
+        # buffers are already in it; see color.working_space).
         from .. import color
         config = color.blender_config()
         name = image.colorspace_settings.name
-        if name and name != config.scene_linear and name not in {"Non-Color", "Raw"}:
-            pixels = config.convert(pixels, name, config.scene_linear)
+        if name and name not in {"Non-Color", "Raw"}:
+            pixels = color.to_working_space(config, pixels, name)
     return pixels
 
 
@@ -388,7 +390,11 @@ def world_lighting(scene, order):
         lighting[0] = r.colour * r.strength * sqrt_4pi
         return lighting, r.note
     image = r.environment.image
-    key = (image.name, image.filepath, tuple(image.size), image.colorspace_settings.name, order)
+    from .. import color
+    # The working space (Blender 5.0+) changes what the pixels mean, and a
+    # float image's pixels themselves.
+    key = (image.name, image.filepath, tuple(image.size), image.colorspace_settings.name,
+           color.file_working_space(), order)
     coefficients = _lighting_cache.get(key)
     if coefficients is None:
         pixels = _image_pixels_top_down(image)
