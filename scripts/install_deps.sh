@@ -1,23 +1,23 @@
 #!/usr/bin/env bash
 # Installs everything Penumbra needs on a Debian 12 machine, and nothing twice:
-# Debian packages only when one is missing, the .venv only when its
-# requirements file changed. Safe to run on every `make`.
+# Debian packages only when one is missing, each virtual environment only when
+# its requirements file changed, the PyPI libraries only when missing from
+# .deps. Safe to run on every `make`.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# Debian: Blender 3.4, the C++ libraries, tools used by tests and the demo.
+# Debian: Blender 3.4, the libraries the core builds against, test tools.
 DEBIAN_PACKAGES=(
-  blender                 # Blender 3.4: the add-on's first target, and its Python 3.11
-  libopenimageio-dev      # image and video I/O (EXR, HDR, PNG, TIFF, ffmpeg reader)
-  openimageio-tools       # oiiotool/iinfo: inspect outputs by hand
-  libopencolorio-dev      # colour management (Blender's own OCIO config)
-  libembree-dev           # ray casting for the visibility baker
-  libeigen3-dev           # linear algebra
+  blender                 # Blender 3.4: the first Blender the add-on supports (Python 3.11)
+  libembree-dev           # ray casting for the visibility baker (copied into the package)
+  libtbb-dev              # oneTBB: Embree's scheduler and the core's one parallel helper
+  libeigen3-dev           # linear algebra (header-only)
+  libimath-dev libfmt-dev # headers OpenImageIO's public headers include (header-only use)
   libgtest-dev            # C++ unit tests
-  pybind11-dev            # the _penumbra Python module
-  cmake g++ make pkg-config  # the build
-  ffmpeg                  # makes the test videos that OpenImageIO's ffmpeg reader decodes
-  python3-venv            # the .venv below
+  cmake g++ make pkg-config binutils  # the build; readelf checks the packages' dependencies
+  ffmpeg                  # makes the test videos (decoding uses the ffmpeg the package ships)
+  xvfb xauth              # a display for Blender's GPU and EEVEE work in tests and the demo
+  python3-venv            # the virtual environments below
   python3-pytest python3-numpy  # pytest and numpy inside Debian's Blender (it runs the system Python)
 )
 missing=()
@@ -31,16 +31,43 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 
-# PyPI, in .venv: bpy 4.5 LTS (Blender as a module), numpy < 2, pytest, mpmath.
-PYTHON="${PENUMBRA_PYTHON:-python3}"
-if [ ! -x .venv/bin/python ]; then
-  echo "install_deps: creating .venv with $($PYTHON --version)"
-  "$PYTHON" -m venv .venv
-fi
-stamp=.venv/.penumbra-requirements
-if ! cmp -s requirements.txt "$stamp"; then
-  echo "install_deps: installing requirements.txt into .venv"
-  .venv/bin/python -m pip install -q --upgrade pip
-  .venv/bin/python -m pip install -q -r requirements.txt
-  cp requirements.txt "$stamp"
-fi
+# A Python of version $1 (3.10, 3.13): $PENUMBRA_PYTHON3XY, python3.X on PATH, or pyenv's.
+find_python() {
+  local version=$1 var="PENUMBRA_PYTHON${1//./}" candidate
+  for candidate in "${!var:-}" "$(command -v "python$version" || true)" \
+      "$(ls -d "${PYENV_ROOT:-$HOME/.pyenv}"/versions/"$version".*/bin/python"$version" 2>/dev/null | sort -V | tail -n 1)"; do
+    if [ -n "$candidate" ] && "$candidate" -c "import sys, venv; sys.exit(sys.version_info[:2] != tuple(map(int, '$version'.split('.'))))" 2>/dev/null; then
+      echo "$candidate"
+      return
+    fi
+  done
+  echo "install_deps: Python $version is needed (Blender $2 runs it) but was not found." >&2
+  echo "  Install it (pyenv install $version, or your distribution's python$version with venv and headers)," >&2
+  echo "  or point $var at its interpreter: $var=/path/to/python$version make ..." >&2
+  exit 1
+}
+
+# make_venv FOLDER PYTHON [REQUIREMENTS]: a venv, refreshed when the requirements change.
+make_venv() {
+  local folder=$1 python=$2 requirements=${3:-}
+  if [ ! -x "$folder/bin/python" ]; then
+    echo "install_deps: creating $folder with $("$python" --version)"
+    "$python" -m venv "$folder"
+  fi
+  if [ -n "$requirements" ] && ! cmp -s "$requirements" "$folder/.penumbra-requirements"; then
+    echo "install_deps: installing $requirements into $folder"
+    "$folder/bin/python" -m pip install -q --upgrade pip
+    "$folder/bin/python" -m pip install -q -r "$requirements"
+    cp "$requirements" "$folder/.penumbra-requirements"
+  fi
+}
+
+# .venv: Python 3.11 (Debian's Blender 3.4 and bpy 4.5 run it), the build tools.
+make_venv .venv "${PENUMBRA_PYTHON:-python3}" requirements.txt
+# .venv313: bpy 5.2 (Blender 5.1+ run Python 3.13); its interpreter builds the cp313 module.
+make_venv .venv313 "$(find_python 3.13 "5.1+")" requirements-bpy52.txt
+# .venv310: only an interpreter and headers, for the cp310 module of official Blender 3.x builds.
+make_venv .venv310 "$(find_python 3.10 "3.x (official builds)")"
+
+# OpenImageIO, OpenColorIO and ffmpeg from PyPI, pinned (scripts/native_deps.py).
+.venv/bin/python scripts/native_deps.py

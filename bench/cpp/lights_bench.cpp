@@ -81,7 +81,6 @@ double peak_rss_mb() {
 // A 16384x8192 half-float EXR upsampled (bilinear) from `world`, written one
 // scanline at a time so the writer itself never holds the image.
 int make_16k(const std::string& world, const std::string& out_path) {
-    namespace OIIO = OIIO_NAMESPACE;
     const Image in = read_image(world);
     const int w = 16384, h = 8192;
     OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::HALF);

@@ -12,7 +12,6 @@
 
 namespace penumbra {
 
-namespace OIIO = OIIO_NAMESPACE;
 namespace fs = std::filesystem;
 
 namespace {
@@ -90,15 +89,6 @@ ImageInfo read_image_info(const std::string& path) {
     info.file_channels = spec.nchannels;
     info.format = in->format_name();
     info.colorspace = recorded_colorspace(spec);
-    if (const OIIO::ParamValue* fps = spec.find_attribute("FramesPerSecond")) {
-        if (fps->type() == OIIO::TypeRational) {
-            const int* r = static_cast<const int*>(fps->data());
-            info.frames_per_second = r[1] ? double(r[0]) / r[1] : 0.0;
-        } else {
-            info.frames_per_second = fps->get_float();
-        }
-    }
-    info.is_movie = spec.get_int_attribute("oiio:Movie", 0) != 0;
     info.subimages = count_subimages(*in);
     return info;
 }

@@ -26,17 +26,16 @@ struct ImageInfo {
     int width = 0;
     int height = 0;
     int file_channels = 0;     // channels in the file, before conversion to RGB
-    int subimages = 1;         // frames, for a video file
-    std::string format;        // OpenImageIO's format name: "openexr", "png", "FFmpeg", ...
+    int subimages = 1;         // parts of a multi-part file
+    std::string format;        // OpenImageIO's format name: "openexr", "png", ...
     std::string colorspace;    // colour space recorded in the file, "" if none
-    double frames_per_second = 0.0;  // video only
-    bool is_movie = false;     // a video file (OpenImageIO's "oiio:Movie")
 };
 
 // Header only; throws IoError for a missing, empty, truncated or unknown file.
 ImageInfo read_image_info(const std::string& path);
 
-// Subimage `subimage` (a video frame) as float RGB. Throws IoError.
+// Subimage `subimage` (a part of a multi-part file) as float RGB. Throws IoError.
+// Videos are read through image/video.hpp.
 Image read_image(const std::string& path, int subimage = 0);
 
 enum class ExrPrecision { half, full };

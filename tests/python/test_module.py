@@ -29,11 +29,13 @@ def test_build_info_names_every_library_with_a_version():
 def test_only_the_module_init_symbol_is_exported():
     # Hidden symbols keep the module from interposing on Blender's own
     # OpenImageIO/OpenColorIO/TBB; `nm -D --defined-only` lists what is visible.
-    so = glob.glob(os.path.join(ADDON_DIR, "_penumbra*.so"))
-    assert len(so) == 1
-    out = subprocess.run(["nm", "-D", "--defined-only", so[0]], capture_output=True, text=True, check=True).stdout
-    exported = [line.split()[-1] for line in out.splitlines() if line.split()[1] in "TDBRVW"]
-    assert exported == ["PyInit__penumbra"], exported
+    # One module per supported Python (3.10, 3.11, 3.13), each checked.
+    modules = glob.glob(os.path.join(ADDON_DIR, "_penumbra*.so"))
+    assert len(modules) == 3, modules
+    for so in modules:
+        out = subprocess.run(["nm", "-D", "--defined-only", so], capture_output=True, text=True, check=True).stdout
+        exported = [line.split()[-1] for line in out.splitlines() if line.split()[1] in "TDBRVW"]
+        assert exported == ["PyInit__penumbra"], (so, exported)
 
 
 def test_exception_types_are_python_exceptions_with_useful_bases():

@@ -18,7 +18,6 @@
 namespace penumbra::lights {
 namespace {
 
-namespace OIIO = OIIO_NAMESPACE;
 using penumbra::testing::ScratchDir;
 
 // Random HDR content with a bright spot and a few bad values, written with
