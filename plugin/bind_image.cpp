@@ -7,6 +7,7 @@
 #include "common/error.hpp"
 #include "image/frame_source.hpp"
 #include "image/image_io.hpp"
+#include "image/video.hpp"
 #include "numpy_image.hpp"
 
 namespace py = pybind11;
@@ -31,15 +32,41 @@ py::dict info_to_dict(const ImageInfo& info) {
     d["subimages"] = info.subimages;
     d["format"] = info.format;
     d["colorspace"] = info.colorspace;
+    d["frames_per_second"] = 0.0;
+    d["is_movie"] = false;
+    return d;
+}
+
+py::dict info_to_dict(const VideoInfo& info) {
+    py::dict d;
+    d["width"] = info.width;
+    d["height"] = info.height;
+    d["channels"] = 3;
+    d["subimages"] = info.frame_count;
+    d["format"] = info.codec;
+    d["colorspace"] = "";
     d["frames_per_second"] = info.frames_per_second;
-    d["is_movie"] = info.is_movie;
+    d["is_movie"] = true;
     return d;
 }
 
 }  // namespace
 
 void bind_image(py::module_& m) {
+    m.def("set_ffmpeg_executable", &set_ffmpeg_executable, py::arg("path"),
+          "The ffmpeg program that decodes video (the add-on passes the one it ships); '' restores "
+          "the default: $PENUMBRA_FFMPEG, else ffmpeg on PATH.");
+    m.def("ffmpeg_executable", &ffmpeg_executable, "The ffmpeg program video is decoded with.");
+
     m.def("read_image_info", [](const std::string& path) {
+        if (is_video_file(path)) {
+            VideoInfo info;
+            {
+                py::gil_scoped_release release;
+                info = probe_video(path);
+            }
+            return info_to_dict(info);
+        }
         ImageInfo info;
         {
             py::gil_scoped_release release;
@@ -54,7 +81,7 @@ void bind_image(py::module_& m) {
         Image image;
         {
             py::gil_scoped_release release;
-            image = read_image(path, frame);
+            image = is_video_file(path) ? VideoReader(path).read(frame) : read_image(path, frame);
         }
         return image_to_array(std::move(image));
     }, py::arg("path"), py::arg("frame") = 0,

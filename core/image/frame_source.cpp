@@ -6,6 +6,7 @@
 
 #include "common/error.hpp"
 #include "image/image_io.hpp"
+#include "image/video.hpp"
 
 namespace penumbra {
 
@@ -94,26 +95,19 @@ private:
 
 class VideoFile final : public FrameSource {
 public:
-    explicit VideoFile(std::string path) : path_(std::move(path)), info_(read_image_info(path_)) {}
-    int frame_count() const override { return info_.subimages; }
-    int width() const override { return info_.width; }
-    int height() const override { return info_.height; }
-    double frames_per_second() const override { return info_.frames_per_second; }
-    Image read(int index) const override {
-        if (index < 0 || index >= frame_count())
-            throw ArgumentError("frame index " + std::to_string(index) + " is outside the video's " +
-                                std::to_string(frame_count()) + " frames");
-        Image image = read_image(path_, index);
-        check_size(image, info_.width, info_.height, "video frame " + std::to_string(index));
-        return image;
-    }
+    explicit VideoFile(std::string path) : path_(std::move(path)), reader_(path_) {}
+    int frame_count() const override { return reader_.info().frame_count; }
+    int width() const override { return reader_.info().width; }
+    int height() const override { return reader_.info().height; }
+    double frames_per_second() const override { return reader_.info().frames_per_second; }
+    Image read(int index) const override { return reader_.read(index); }
     std::string describe() const override {
         return "video '" + path_ + "' (" + std::to_string(frame_count()) + " frames)";
     }
 
 private:
     std::string path_;
-    ImageInfo info_;
+    mutable VideoReader reader_;  // decodes in order: reading advances it
 };
 
 }  // namespace
@@ -170,8 +164,7 @@ std::unique_ptr<FrameSource> open_frames(const std::string& path, FrameSourceKin
     case FrameSourceKind::automatic:
         break;
     }
-    const ImageInfo info = read_image_info(path);
-    if (info.is_movie)
+    if (is_video_file(path))
         return std::make_unique<VideoFile>(path);
     NamePattern pattern;
     if (split_frame_number(fs::path(path).filename().string(), pattern)) {

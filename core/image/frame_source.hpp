@@ -9,7 +9,7 @@
 // not become a light rig that silently skips time). Every frame must have the
 // first frame's size.
 //
-// Videos are read through OpenImageIO's ffmpeg reader, one frame per subimage.
+// Videos are decoded by FFmpeg in a child process (image/video.hpp).
 #pragma once
 
 #include <memory>
@@ -34,7 +34,7 @@ public:
 
 enum class FrameSourceKind { automatic, single_image, sequence, video };
 
-// Opens `path` as the given kind; `automatic` picks video for a movie file, a sequence when the name has a
+// Opens `path` as the given kind; `automatic` picks video for a movie file (by extension), a sequence when the name has a
 // frame number and neighbours exist, else a single image. Throws IoError.
 std::unique_ptr<FrameSource> open_frames(const std::string& path,
                                          FrameSourceKind kind = FrameSourceKind::automatic);

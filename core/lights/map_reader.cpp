@@ -9,10 +9,10 @@
 
 #include "common/error.hpp"
 #include "image/image_io.hpp"
+#include "image/video.hpp"
 
 namespace penumbra::lights {
 
-namespace OIIO = OIIO_NAMESPACE;
 
 namespace {
 
@@ -151,8 +151,7 @@ EnvironmentMap read_environment(const std::string& path, const ColorConfig* conf
 }
 
 LightSource::LightSource(const std::string& path, FrameSourceKind kind) : frames_(open_frames(path, kind)) {
-    const ImageInfo info = read_image_info(path);
-    if (info.is_movie || kind == FrameSourceKind::video) return;
+    if (kind == FrameSourceKind::video || (kind == FrameSourceKind::automatic && is_video_file(path))) return;
     if (frames_->frame_count() == 1) {
         files_ = {path};
     } else {
