@@ -418,7 +418,8 @@ void bind_visibility(py::module_& m) {
         .def("shade", [](const vis::PoseModel& x, const Floats& joint_rotations, const Floats& positions,
                          const Floats& normals, const Indices& triangles, const Indices& neighbours,
                          const Doubles& lighting, const std::string& model, double phong_exponent,
-                         const Doubles& camera, const Doubles& transmission, int threads) {
+                         const std::array<double, 3>& camera, const std::array<double, 3>& transmission,
+                         int threads) {
             const auto r = rotations(joint_rotations, x.joints.size(), "joint_rotations");
             const auto p = triples(positions, "positions"), n = triples(normals, "normals");
             const auto t = indices(triangles, "triangles", true), nb = indices(neighbours, "neighbours", false);
@@ -428,16 +429,14 @@ void bind_visibility(py::module_& m) {
             Eigen::MatrixXd l(n_sh, 3);
             for (py::ssize_t i = 0; i < n_sh; ++i)
                 for (int c = 0; c < 3; ++c) l(i, c) = lighting.at(i, c);
-            if (camera.size() != 3 || transmission.size() != 3)
-                throw py::value_error("camera and transmission must have 3 values");
             sh::ShadingParameters sp;
             if (model == "diffuse") sp.model = sh::ShadingModel::diffuse;
             else if (model == "phong") sp.model = sh::ShadingModel::phong;
             else if (model == "translucent") sp.model = sh::ShadingModel::translucent;
             else throw py::value_error("model must be 'diffuse', 'phong' or 'translucent', got '" + model + "'");
             sp.phong_exponent = phong_exponent;
-            sp.camera = Eigen::Vector3d(camera.data()[0], camera.data()[1], camera.data()[2]);
-            sp.transmission = {transmission.data()[0], transmission.data()[1], transmission.data()[2]};
+            sp.camera = Eigen::Vector3d(camera[0], camera[1], camera[2]);
+            sp.transmission = transmission;
             sp.threads = threads;
             vis::RuntimeResult result;
             {
@@ -455,7 +454,10 @@ void bind_visibility(py::module_& m) {
                                   to_array(result.visibility, {py::ssize_t(x.vertex_count)}), info);
         }, py::arg("joint_rotations"), py::arg("positions"), py::arg("normals"), py::arg("triangles"),
            py::arg("neighbours"), py::arg("lighting"), py::arg("model") = "diffuse", py::arg("phong_exponent") = 1.0,
-           py::arg("camera") = Doubles(py::array_t<double>(3)), py::arg("transmission") = Doubles(py::array_t<double>(3)),
+           // The defaults are the core's own (sh::ShadingParameters), never typed here again.
+           py::arg("camera") = std::array<double, 3>{sh::ShadingParameters{}.camera[0], sh::ShadingParameters{}.camera[1],
+                                                     sh::ShadingParameters{}.camera[2]},
+           py::arg("transmission") = sh::ShadingParameters{}.transmission,
            py::arg("threads") = 0,
            "The whole run time for one pose: lobes from the pose, frames from the deformed mesh, shading with the SH "
            "engine under lighting (order², 3). Returns (rgb (V, 3) float32, ao (V,) float32, info with timings).");
