@@ -206,12 +206,9 @@ try:
         result[f"{n} mean"] = float(np.mean((rig_a @ y)[mask]) / np.mean((world_a @ y)[mask]))
         result[f"{n} noise"] = rel(render(f"rig_{n}_b", 2), rig_a)  # the rig render's own noise
     print("RESULT " + json.dumps(result))
-    sys.stdout.flush()
-    os._exit(0)
 except Exception:
     traceback.print_exc()
-    sys.stdout.flush()
-    os._exit(1)  # bpy can hang in its exit handlers after an error
+    sys.exit(1)
 """
 SHADOW_COUNTS = (16, 64, 256)
 SHADOW_SPP = 128

@@ -511,13 +511,4 @@ def write_markdown(r):
 
 
 if __name__ == "__main__":
-    try:
-        main()
-    except BaseException:
-        import traceback
-        traceback.print_exc()
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(1)  # bpy 4.5 can hang in its exit handlers after an error
-    sys.stdout.flush()
-    os._exit(0)
+    main()

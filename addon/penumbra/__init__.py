@@ -9,7 +9,7 @@
 bl_info = {
     "name": "Penumbra",
     "author": "Penumbra developers",
-    "version": (0, 1, 0),
+    "version": (0, 2, 0),
     "blender": (3, 4, 0),
     "location": "3D Viewport > Sidebar > Penumbra",
     "description": "Shadowed relighting of rigged meshes, light rigs from HDR video, filtered colour maps",
@@ -24,6 +24,9 @@ if "bpy" in locals():
         if _name in locals():
             importlib.reload(locals()[_name])
 
+import atexit  # noqa: E402
+import sys  # noqa: E402
+
 import bpy  # noqa: E402
 
 from . import native, color, visibility, lights, colormap, properties, preferences, panels  # noqa: E402
@@ -33,11 +36,54 @@ from . import native, color, visibility, lights, colormap, properties, preferenc
 _modules = (properties, preferences, visibility, lights, colormap, panels)
 
 
+_registered = False
+
+
 def register():
-    for module in _modules:
-        module.register()
+    global _registered
+    done = []
+    try:
+        for module in _modules:
+            module.register()
+            done.append(module)
+    except Exception:
+        # Leave nothing half-registered: a later register() must work, and
+        # leftover callbacks would keep a bpy-module process from exiting.
+        for module in reversed(done):
+            module.unregister()
+        raise
+    _registered = True
+    if _is_bpy_module():
+        atexit.register(_unregister_at_exit)
 
 
 def unregister():
+    # Idempotent: at exit Blender may disable the add-on after our own
+    # atexit handler (below) already has.
+    global _registered
+    atexit.unregister(_unregister_at_exit)
+    if not _registered:
+        return
+    _registered = False
     for module in reversed(_modules):
         module.unregister()
+
+
+# Why a batch script that registers the add-on must unregister it at exit:
+# the bpy module (before Blender 5.0) shuts Blender down, and stops its audio
+# thread, only when Python frees the `bpy` module object. Our properties'
+# update callbacks live in Blender's own memory, and their globals reach
+# `bpy`, so that object is never freed; Blender's exit then waits forever on
+# the audio thread (GlobalState::~GlobalState). The Blender program avoids
+# this by disabling add-ons on quit (bpy.utils._on_exit); a bpy-module
+# process has no quit, so the add-on does the same from an atexit handler,
+# which runs before Python tears its modules down. docs/packaging.md.
+def _is_bpy_module():
+    return not bpy.app.binary_path
+
+
+def _unregister_at_exit():
+    try:
+        unregister()
+    except Exception as error:  # never let exit fail; say why it may hang
+        print(f"Penumbra: could not unregister at exit ({error})", file=sys.stderr)

@@ -1,6 +1,7 @@
 """Runs pytest inside Blender's own Python:
-    blender -b --factory-startup --python-exit-code 1 --python tests/blender/pytest_in_blender.py -- ARGS
-ARGS go to pytest; Blender exits with pytest's status."""
+    blender -b --factory-startup --python tests/blender/pytest_in_blender.py -- ARGS
+ARGS go to pytest; Blender exits with pytest's status: in background mode a
+SystemExit raised by a --python script ends Blender with that code."""
 
 import sys
 
@@ -9,6 +10,4 @@ import pytest
 args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
 status = pytest.main(args)
 sys.stdout.flush()
-# os._exit: Blender would otherwise swallow SystemExit's code in background mode.
-import os  # noqa: E402
-os._exit(int(status))
+sys.exit(int(status))
