@@ -6,6 +6,7 @@
 #include <numbers>
 #include <string>
 
+#include "common/math.hpp"
 #include "common/error.hpp"
 
 namespace penumbra::lights {
@@ -102,7 +103,7 @@ bool image_to_direction(Projection projection, const FisheyeLens& lens, int widt
     case Projection::fisheye: {
         double u, v;
         to_circle(width, height, x, y, u, v);
-        const double rho = std::hypot(u, v);
+        const double rho = length_2d(u, v);
         if (rho > 1.0) return false;
         const double theta = lens.theta_of_radius(rho);
         const double s = std::sin(theta);
@@ -144,7 +145,7 @@ bool direction_to_image(Projection projection, const FisheyeLens& lens, int widt
     case Projection::fisheye: {
         if (theta > 0.5 * pi + 1e-12) return false;
         const double rho = lens.distortion(std::min(theta, 0.5 * pi)) / lens.distortion(0.5 * pi);
-        const double s = std::hypot(d.x(), d.y());
+        const double s = length_2d(d.x(), d.y());
         const double u = s > 0.0 ? -d.x() / s * rho : 0.0;
         const double v = s > 0.0 ? d.y() / s * rho : 0.0;
         from_circle(width, height, u, v, x, y);
@@ -175,7 +176,7 @@ double pixel_solid_angle(Projection projection, const FisheyeLens& lens, int wid
     case Projection::fisheye: {
         double u, v;
         to_circle(width, height, column + 0.5, row + 0.5, u, v);
-        const double rho = std::hypot(u, v);
+        const double rho = length_2d(u, v);
         if (rho > 1.0) return 0.0;
         const double r = 0.5 * std::min(width, height);
         const double rim = lens.distortion(0.5 * pi);

@@ -7,6 +7,7 @@
 
 #include <Eigen/LU>
 
+#include "common/math.hpp"
 #include "common/error.hpp"
 
 namespace penumbra::lights {
@@ -186,7 +187,7 @@ Image preview_image(const EnvironmentMap& map, const std::vector<Light>& lights,
         const int r = int(std::ceil(radius + 1));
         for (int dy = -r; dy <= r; ++dy)
             for (int dx = -r; dx <= r; ++dx) {
-                const double dist = std::hypot(dx, dy);
+                const double dist = length_2d(dx, dy);
                 if (std::abs(dist - radius) > 0.75) continue;
                 const int px = ((int(std::floor(x)) + dx) % out.width + out.width) % out.width;
                 const int py = int(std::floor(y)) + dy;

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <string>
 
+#include "common/math.hpp"
 #include "common/error.hpp"
 #include "lights/parallel.hpp"
 
@@ -346,7 +347,7 @@ Eigen::Vector2d concentric_square_to_disc(double u, double v) {
 
 Eigen::Vector2d concentric_disc_to_square(const Eigen::Vector2d& p) {
     const double x = p.x(), y = p.y();
-    const double r = std::hypot(x, y);
+    const double r = length_2d(x, y);
     if (r == 0.0) return {0.5, 0.5};
     double a, b;
     if (std::abs(x) >= std::abs(y)) {

@@ -10,6 +10,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "common/math.hpp"
 #include "common/error.hpp"
 #include "sh/basis.hpp"
 #include "sh/point_sets.hpp"
@@ -117,7 +118,7 @@ struct Problem {
 // Keeps Lambert coordinates inside the disc of radius 2.
 void clamp_disc(double* q, int lobes) {
     for (int x = 0; x < lobes; ++x) {
-        const double r = std::hypot(q[2 * x], q[2 * x + 1]);
+        const double r = length_2d(q[2 * x], q[2 * x + 1]);
         if (r > 1.999) {
             q[2 * x] *= 1.999 / r;
             q[2 * x + 1] *= 1.999 / r;
