@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
-"""Penumbra's main job, headless: runs examples/demo_blender.py inside both
-Blenders (Debian's `blender` 3.4 and the bpy 4.5 module in .venv) and writes
-everything under --out (default out/). `make demo` calls this."""
+"""Penumbra's main job, headless: runs examples/demo_blender.py inside the
+three Blenders (Debian's `blender` 3.4, the bpy 4.5 module in .venv and the
+bpy 5.2 module in .venv313) and writes everything under --out (default out/).
+`make demo` calls this."""
 
 import argparse
 import os
@@ -26,8 +27,8 @@ def main():
         sys.exit("demo: Debian's `blender` is missing; run scripts/install_deps.sh (make demo does)")
     runs.append(("blender-3.4", [blender, "-b", "--factory-startup", "--python-exit-code", "1",
                                  "--python", SCRIPT, "--", "--out", os.path.join(out, "blender-3.4")]))
-    runs.append(("bpy-4.5", [os.path.join(ROOT, ".venv", "bin", "python"), SCRIPT,
-                             "--out", os.path.join(out, "bpy-4.5")]))
+    for name, venv in (("bpy-4.5", ".venv"), ("bpy-5.2", ".venv313")):
+        runs.append((name, [os.path.join(ROOT, venv, "bin", "python"), SCRIPT, "--out", os.path.join(out, name)]))
     failed = []
     for name, command in runs:
         print(f"=== demo in {name} ===", flush=True)
