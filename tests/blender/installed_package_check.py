@@ -96,6 +96,12 @@ def colormap(out):
             "lookup_images": sorted(f for f in os.listdir(out) if f.endswith(".exr"))}
 
 
+def mapped_libraries():
+    """Shared libraries mapped in this process, by path (Linux)."""
+    with open("/proc/self/maps") as f:
+        return sorted({line.split()[-1] for line in f if ".so" in line.split()[-1]})
+
+
 def main():
     args = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
     zip_path, video, out = args
@@ -112,6 +118,7 @@ def main():
             report[name] = run()
         except Exception:
             report[name] = {"error": traceback.format_exc()}
+    report["mapped"] = mapped_libraries()
     report["uninstall"] = uninstall()
     report["enabled_after_uninstall"] = MODULE in bpy.context.preferences.addons
     print("RESULT " + json.dumps(report), flush=True)

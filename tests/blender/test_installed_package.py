@@ -81,6 +81,19 @@ def test_the_colour_map_lookup_is_baked_by_the_installed_package(installed_run):
     assert result["ramp_muted"] and result["lookup_images"]
 
 
+def test_the_package_brings_its_own_libraries_and_maps_each_once(installed_run):
+    """The libraries come from the package (auditwheel gave them unique
+    names), beside whatever copies Blender itself has mapped; TBB included:
+    Blender's own, where it is in the global scope, serves both (docs/packaging.md)."""
+    ours = [lib for lib in installed_run["mapped"] if lib.startswith(installed_run["user_folder"])]
+    families = {os.path.basename(lib).split("-")[0] for lib in ours if ".libs/" in lib}
+    assert {"libOpenImageIO", "libOpenImageIO_Util", "libOpenColorIO", "libembree3", "libtbb"} <= families, ours
+    by_name = {}
+    for lib in installed_run["mapped"]:
+        by_name.setdefault(os.path.basename(lib), []).append(lib)
+    assert not {k: v for k, v in by_name.items() if len(v) > 1}
+
+
 def test_the_add_on_is_disabled_and_removed(installed_run):
     assert installed_run["uninstall"] == ["FINISHED"]
     assert not installed_run["enabled_after_uninstall"]
