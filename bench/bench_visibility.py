@@ -41,6 +41,23 @@ def log(*args):
     print("bench_visibility:", *args, flush=True)
 
 
+def raw_throughput(mesh, rays_per_vertex, threads, mode):
+    """Raw Embree occlusion throughput on `mesh` (the baseline), measured by
+    bench/cpp/visibility_throughput_bench.cpp in its own process."""
+    import subprocess
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        files = []
+        for name, array, dtype in (("p.f32", mesh.positions, np.float32), ("n.f32", mesh.normals, np.float32),
+                                   ("t.u32", mesh.triangles, np.uint32)):
+            files.append(os.path.join(tmp, name))
+            np.ascontiguousarray(array, dtype).tofile(files[-1])
+        exe = os.path.join(ROOT, "build", "bench", "penumbra_visibility_throughput_bench")
+        out = subprocess.run([exe, *files, str(rays_per_vertex), str(threads), mode],
+                             capture_output=True, text=True, check=True).stdout
+    return json.loads(out)
+
+
 def new_character(detail, frames=FRAMES):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     obj, rig = visibility_character.build(detail=detail, frames=frames)
@@ -211,9 +228,9 @@ def main():
     # Throughput on the rest pose: raw Embree vs the bake, same mesh, same run.
     bpy.context.scene.frame_set(1)
     frame = scene_data.evaluated_mesh(obj, bpy.context.evaluated_depsgraph_get())
-    raw_single = core.visibility_occlusion_throughput(frame.positions, frame.normals, frame.triangles, 128, 0, "single")
-    raw_packet = core.visibility_occlusion_throughput(frame.positions, frame.normals, frame.triangles, 128, 0, "packet")
-    raw_one_thread = core.visibility_occlusion_throughput(frame.positions, frame.normals, frame.triangles, 128, 1, "single")
+    raw_single = raw_throughput(frame, 128, 0, "single")
+    raw_packet = raw_throughput(frame, 128, 0, "packet")
+    raw_one_thread = raw_throughput(frame, 128, 1, "single")
     results["raw_embree"] = {"single": raw_single, "packet": raw_packet, "single_one_thread": raw_one_thread}
     log(f"raw Embree: {raw_single['rays_per_second'] / 1e6:.2f} M rays/s (rtcOccluded1, all threads), "
         f"{raw_packet['rays_per_second'] / 1e6:.2f} M (packets of {raw_packet['packet_width']}), "
@@ -247,7 +264,7 @@ def main():
     def raw_posed():
         rays = seconds = 0.0
         for mesh in posed:
-            r = core.visibility_occlusion_throughput(mesh.positions, mesh.normals, mesh.triangles, 64, 0, "single")
+            r = raw_throughput(mesh, 64, 0, "single")
             rays += r["rays"]
             seconds += r["seconds"]
         return rays / seconds

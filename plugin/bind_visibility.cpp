@@ -20,7 +20,6 @@
 #include "visibility/model_file.hpp"
 #include "visibility/pose_model.hpp"
 #include "visibility/runtime_shading.hpp"
-#include "visibility/throughput.hpp"
 #include "visibility/visibility_bake.hpp"
 #include "visibility/zh_fit.hpp"
 
@@ -578,27 +577,6 @@ void bind_visibility(py::module_& m) {
         for (py::ssize_t i = 0; i < sh.shape(0); ++i) out[i] = vis::ambient_occlusion(order, sh.data() + i * order * order);
         return to_array(out, {sh.shape(0)});
     }, py::arg("sh"), "Cosine-weighted visibility (AO) √(4π)(T_diffuse v)_00 of SH visibility vectors.");
-
-    m.def("visibility_occlusion_throughput", [](const Floats& positions, const Floats& normals, const Indices& triangles,
-                                                int rays_per_vertex, int threads, const std::string& mode) {
-        vis::ThroughputResult r;
-        const auto p = triples(positions, "positions"), n = triples(normals, "normals");
-        const auto t = indices(triangles, "triangles", true);
-        {
-            py::gil_scoped_release release;
-            r = vis::measure_occlusion_throughput(p, n, t, rays_per_vertex, threads, mode);
-        }
-        py::dict d;
-        d["rays"] = r.rays;
-        d["seconds"] = r.seconds;
-        d["rays_per_second"] = r.rays_per_second;
-        d["occluded_fraction"] = r.occluded_fraction;
-        d["packet_width"] = r.packet_width;
-        return d;
-    }, py::arg("positions"), py::arg("normals"), py::arg("triangles"), py::arg("rays_per_vertex") = 128,
-       py::arg("threads") = 0, py::arg("mode") = "single",
-       "Raw Embree occlusion throughput on a mesh (the baseline of the bake benchmark): rays from every vertex "
-       "(offset along its normal) in random upper-hemisphere directions; mode 'single' (rtcOccluded1) or 'packet'.");
 }
 
 }  // namespace penumbra::bindings

@@ -34,7 +34,7 @@
 #include "lights/clustering.hpp"
 #include "lights/lights.hpp"
 #include "lights/map_reader.hpp"
-#include "lights/parallel.hpp"
+#include "common/parallel.hpp"
 #include "lights/rig.hpp"
 #include "lights/temporal.hpp"
 

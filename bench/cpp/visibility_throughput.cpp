@@ -1,5 +1,6 @@
-#include "visibility/throughput.hpp"
+#include "visibility_throughput.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -10,7 +11,6 @@
 #include "common/error.hpp"
 #include "visibility/mesh_frames.hpp"
 #include "visibility/occlusion_scene.hpp"
-#include "visibility/parallel.hpp"
 
 namespace penumbra::visibility {
 
@@ -40,7 +40,7 @@ ThroughputResult measure_occlusion_throughput(const std::vector<float>& position
             directions[v * rays_per_vertex + i] = (r * std::cos(phi) * t + r * std::sin(phi) * b + z * n).cast<float>();
         }
     }
-    const int n_threads = resolve_threads(threads);
+    const int n_threads = threads > 0 ? threads : int(std::max(1u, std::thread::hardware_concurrency()));
     std::atomic<std::size_t> next{0}, occluded_total{0};
     const bool single = mode == "single";
     const float far = std::numeric_limits<float>::infinity();

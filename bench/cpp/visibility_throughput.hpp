@@ -1,7 +1,9 @@
 // The baseline the bake benchmark compares against: raw Embree occlusion
 // throughput on the same mesh, with nothing else in the loop (no frames, no
-// projection). Directions are drawn in advance (uniform on each vertex's
-// upper hemisphere, fixed seed) and only the casting is timed.
+// projection, no task scheduler: plain threads taking blocks of 64 vertices).
+// Directions are drawn in advance (uniform on each vertex's upper
+// hemisphere, fixed seed) and only the casting is timed. A benchmark
+// baseline, so it lives in bench/, not in the library.
 #pragma once
 
 #include <cstdint>

@@ -1,14 +1,13 @@
 #include "colormap/lookup.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 
 namespace penumbra::colormap {
 
@@ -171,35 +170,18 @@ Image build_lookup(const ColorMap& map, const LookupSpec& spec, const Progress& 
     if (map.knot_count() < 1 || map.channels < 1)
         throw ArgumentError("the colour map is empty");
     Image table(spec.width, spec.height, map.channels);
-    const int worker_count = std::max(1, std::min(threads > 0 ? threads : static_cast<int>(std::thread::hardware_concurrency()),
-                                                  spec.height));
-    auto fill_row = [&](int y) {
-        const double sigma = spec.sigma_of_row(y);
-        double value[4];
-        for (int x = 0; x < spec.width; ++x) {
-            filtered_color(map, spec.mean_of_column(x), sigma, value);
-            for (int c = 0; c < map.channels; ++c)
-                table.at(x, y, c) = static_cast<float>(value[c]);
+    // A row per block: a few milliseconds even for wide tables, so cancel is prompt.
+    parallel_for(std::size_t(spec.height), {threads, 1, "colormap.lookup"}, [&](std::size_t begin, std::size_t end) {
+        for (int y = int(begin); y < int(end); ++y) {
+            const double sigma = spec.sigma_of_row(y);
+            double value[4];
+            for (int x = 0; x < spec.width; ++x) {
+                filtered_color(map, spec.mean_of_column(x), sigma, value);
+                for (int c = 0; c < map.channels; ++c)
+                    table.at(x, y, c) = static_cast<float>(value[c]);
+            }
         }
-    };
-    // Rows in chunks; the calling thread reports between chunks (the progress
-    // contract: callbacks come from the caller's thread).
-    const int chunk = std::max(1, 4 * worker_count);
-    for (int start = 0; start < spec.height; start += chunk) {
-        const int end = std::min(spec.height, start + chunk);
-        std::atomic<int> next{start};
-        auto work = [&] {
-            for (int y = next++; y < end; y = next++)
-                fill_row(y);
-        };
-        std::vector<std::thread> pool;
-        for (int t = 1; t < worker_count; ++t)
-            pool.emplace_back(work);
-        work();
-        for (auto& t : pool)
-            t.join();
-        progress.report(static_cast<double>(end) / spec.height);
-    }
+    }, progress);
     return table;
 }
 

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "common/error.hpp"
-#include "lights/parallel.hpp"
+#include "common/parallel.hpp"
 
 namespace penumbra::lights {
 namespace {
@@ -68,9 +68,10 @@ LatLongSpans::LatLongSpans(int in_width, int in_height, int out_width, int out_h
 void reduce_latlong_rows(const LatLongSpans& spans, const float* band, int band_first_row, int in_width,
                          int row_begin, int row_end, EnvironmentMap& out, int threads) {
     const int W = in_width, w = out.width;
-    parallel_for(row_end - row_begin, threads, [&](int b, int e) {
+    parallel_for(std::size_t(row_end - row_begin), {threads, 2, "lights.map_rows"},
+                 [&](std::size_t b, std::size_t e) {
         std::vector<double> row_sum(std::size_t(W) * 3);
-        for (int R = row_begin + b; R < row_begin + e; ++R) {
+        for (int R = row_begin + int(b); R < row_begin + int(e); ++R) {
             const auto& row = spans.rows[R];
             std::fill(row_sum.begin(), row_sum.end(), 0.0);
             double wsum = 0.0;
@@ -197,8 +198,9 @@ EnvironmentMap make_environment(const Image& radiance, const MapOptions& options
     const double theta_max = map.theta_max();
     for (int R0 = 0; R0 < h; R0 += 64) {
         progress.report(double(R0) / h);
-        parallel_for(std::min(64, h - R0), options.threads, [&](int b, int e) {
-            for (int r = R0 + b; r < R0 + e; ++r) {
+        parallel_for(std::size_t(std::min(64, h - R0)), {options.threads, 1, "lights.map_resample"},
+                     [&](std::size_t b, std::size_t e) {
+            for (int r = R0 + int(b); r < R0 + int(e); ++r) {
                 const double t0 = theta_max * r / h, t1 = theta_max * (r + 1) / h;
                 for (int c = 0; c < w; ++c) {
                     double acc[3] = {0, 0, 0}, wsum = 0.0;

@@ -9,7 +9,7 @@
 
 #include "common/error.hpp"
 #include "lights/direction_index.hpp"
-#include "lights/parallel.hpp"
+#include "common/parallel.hpp"
 #include "sh/point_sets.hpp"
 
 namespace penumbra::lights {
@@ -89,22 +89,22 @@ FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistributio
 
     // Region mode: every cell goes to its nearest sample.
     const DirectionIndex index(sample_dirs);
-    const int threads = resolve_threads(options.threads);
+    // One partial sum per block of rows, added in block order: the same
+    // result on any number of threads.
+    const ParallelOptions rows{options.threads, std::max<std::size_t>(1, (std::size_t(map.height) + 63) / 64),
+                               "lights.region_powers"};
     struct Accum {
         std::vector<Eigen::Vector3d> rgb, moment;
         std::vector<double> y;
     };
-    std::vector<Accum> acc(threads);
+    std::vector<Accum> acc(block_count(std::size_t(map.height), rows.block));
     std::vector<int> owner(cells, -1);
-    parallel_for(map.height, threads, [&](int b, int e) {
-        // Each chunk gets its own accumulator slot: the chunk's first row
-        // identifies it deterministically.
-        const int chunk = (map.height + threads - 1) / threads;
-        Accum& a = acc[std::min(threads - 1, b / std::max(1, chunk))];
+    parallel_blocks(std::size_t(map.height), rows, [&](std::size_t block, std::size_t b, std::size_t e) {
+        Accum& a = acc[block];
         a.rgb.assign(n, Eigen::Vector3d::Zero());
         a.moment.assign(n, Eigen::Vector3d::Zero());
         a.y.assign(n, 0.0);
-        for (int r = b; r < e; ++r) {
+        for (int r = int(b); r < int(e); ++r) {
             const double omega = map.solid_angle(r);
             for (int c = 0; c < map.width; ++c) {
                 const std::size_t cell = std::size_t(r) * map.width + c;
@@ -137,12 +137,13 @@ FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistributio
         if (m > 1e-300 && ysum[k] > 0.0) l.direction = moment[k] / m;
     }
     // Spread: RMS angle of each region about its centroid.
-    std::vector<std::vector<double>> partial(threads);
-    parallel_for(map.height, threads, [&](int b, int e) {
-        const int chunk = (map.height + threads - 1) / threads;
-        std::vector<double>& part = partial[std::min(threads - 1, b / std::max(1, chunk))];
+    std::vector<std::vector<double>> partial(acc.size());
+    ParallelOptions spread_rows = rows;
+    spread_rows.stage = "lights.region_spread";
+    parallel_blocks(std::size_t(map.height), spread_rows, [&](std::size_t block, std::size_t b, std::size_t e) {
+        std::vector<double>& part = partial[block];
         part.assign(n, 0.0);
-        for (int r = b; r < e; ++r)
+        for (int r = int(b); r < int(e); ++r)
             for (int c = 0; c < map.width; ++c) {
                 const std::size_t cell = std::size_t(r) * map.width + c;
                 const int k = owner[cell];
@@ -195,8 +196,8 @@ Eigen::MatrixXd exact_irradiance(const EnvironmentMap& map, const std::vector<Ei
         }
     }
     Eigen::MatrixXd e = Eigen::MatrixXd::Zero(Eigen::Index(normals.size()), 3);
-    parallel_for(int(normals.size()), threads, [&](int b, int end) {
-        for (int i = b; i < end; ++i) {
+    parallel_for(normals.size(), {threads, 8, "lights.exact_irradiance"}, [&](std::size_t b, std::size_t end) {
+        for (Eigen::Index i = Eigen::Index(b); i < Eigen::Index(end); ++i) {
             Eigen::Vector3d sum = Eigen::Vector3d::Zero();
             const Eigen::Vector3d n = normals[i];
             for (std::size_t k = 0; k < dir.size(); ++k) {

@@ -8,7 +8,7 @@
 
 #include "common/math.hpp"
 #include "common/error.hpp"
-#include "lights/parallel.hpp"
+#include "common/parallel.hpp"
 
 namespace penumbra::lights {
 namespace {
@@ -271,8 +271,8 @@ LuminanceDistribution luminance_distribution(const EnvironmentMap& map, const st
     d.full_sphere = map.full_sphere;
     d.weight.assign(std::size_t(map.width) * map.height, 0.0);
     d.row_mass.assign(map.height, 0.0);
-    parallel_for(map.height, threads, [&](int b, int e) {
-        for (int r = b; r < e; ++r) {
+    parallel_for(std::size_t(map.height), {threads, 8, "lights.luminance"}, [&](std::size_t b, std::size_t e) {
+        for (int r = int(b); r < int(e); ++r) {
             const double omega = map.solid_angle(r);
             double sum = 0.0;
             for (int c = 0; c < map.width; ++c) {

@@ -16,12 +16,12 @@
 #include <numbers>
 #include <string>
 #include <system_error>
-#include <thread>
 #include <type_traits>
 
 #include <Eigen/Geometry>
 
 #include "common/error.hpp"
+#include "common/parallel.hpp"
 #include "sh/basis.hpp"
 #include "sh/rotation.hpp"
 
@@ -521,36 +521,16 @@ PoseShadingSetup PoseShader::make_setup(const ZonalOperator& op, const Eigen::Ma
 
 template <typename Real>
 ShadingStats PoseShader::run_threads(const PoseShadingSetup& setup, const PoseBuffers<Real>& buffers, int thread_count) {
-    // Contiguous ranges, a multiple of kLanes each, at least kMinimumRange
-    // vertices per thread so that starting a thread (~tens of µs) pays off.
-    constexpr std::size_t kMinimumRange = 2048;
-    const std::size_t n = buffers.vertex_count;
-    std::size_t threads = thread_count ? std::size_t(thread_count) : std::max(1u, std::thread::hardware_concurrency());
-    threads = std::max<std::size_t>(1, std::min(threads, (n + kMinimumRange - 1) / kMinimumRange));
-    std::size_t per_thread = (n + threads - 1) / threads;
-    per_thread = (per_thread + kLanes - 1) / kLanes * kLanes;
-
+    // Blocks of kBlock vertices, a multiple of kLanes, large enough that
+    // scheduling one (~1 µs) is lost in its ~0.1 ms of shading.
+    constexpr std::size_t kBlock = 2048;
+    static_assert(kBlock % kLanes == 0);
     const RangeFunction<Real> run = range_function<Real>(setup.order);
-    std::vector<std::size_t> invalid(threads, 0);
-    std::vector<std::thread> workers;
-    workers.reserve(threads);
-    std::size_t inline_from = threads;  // ranges the calling thread runs itself
-    for (std::size_t w = 1; w < threads; ++w) {
-        const std::size_t begin = std::min(n, w * per_thread), end = std::min(n, begin + per_thread);
-        try {
-            workers.emplace_back(run, std::cref(setup), std::cref(buffers), begin, end, std::ref(invalid[w]));
-        } catch (const std::system_error&) {
-            inline_from = w;  // no more threads to be had: do the rest here
-            break;
-        }
-    }
-    run(setup, buffers, 0, std::min(n, per_thread), invalid[0]);
-    for (std::size_t w = inline_from; w < threads; ++w) {
-        const std::size_t begin = std::min(n, w * per_thread), end = std::min(n, begin + per_thread);
-        run(setup, buffers, begin, end, invalid[w]);
-    }
-    for (std::thread& worker : workers) worker.join();
-
+    std::vector<std::size_t> invalid(block_count(buffers.vertex_count, kBlock), 0);
+    parallel_blocks(buffers.vertex_count, {thread_count, kBlock, "sh.pose_shading"},
+                    [&](std::size_t block, std::size_t begin, std::size_t end) {
+                        run(setup, buffers, begin, end, invalid[block]);
+                    });
     ShadingStats stats;
     for (const std::size_t count : invalid) stats.invalid_vertices += count;
     return stats;

@@ -8,7 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "common/error.hpp"
-#include "visibility/parallel.hpp"
+#include "common/parallel.hpp"
 
 namespace penumbra::visibility {
 
@@ -104,7 +104,7 @@ void vertex_frames(const std::vector<float>& positions, const std::vector<float>
         local.repaired_normals = broken.size();
     }
     std::atomic<std::size_t> fallback{0};
-    parallel_chunks(n_vertices, 16384, threads, [&](std::size_t begin, std::size_t end) {
+    parallel_for(n_vertices, {threads, 16384, "visibility.frames"}, [&](std::size_t begin, std::size_t end) {
         std::size_t fallbacks = 0;
         for (std::size_t v = begin; v < end; ++v) {
             const Eigen::Vector3d& n = normal[v];
@@ -129,7 +129,7 @@ void vertex_frames(const std::vector<float>& positions, const std::vector<float>
             }
         }
         fallback += fallbacks;
-    }, Progress{});
+    });
     local.fallback_tangents = fallback.load();
     if (stats) *stats = local;
 }

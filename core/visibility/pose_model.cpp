@@ -14,7 +14,7 @@
 
 #include "common/error.hpp"
 #include "sh/brdf_operator.hpp"
-#include "visibility/parallel.hpp"
+#include "common/parallel.hpp"
 
 namespace penumbra::visibility {
 
@@ -194,7 +194,7 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
     zs.lobes = lobes;
     zs.iterations = settings.zh_iterations;
     zs.axis_prior = settings.axis_prior;
-    parallel_chunks(V, 16, settings.threads, [&](std::size_t begin, std::size_t end) {
+    parallel_for(V, {settings.threads, 16, "visibility.zh_fit", 0.0, 0.8}, [&](std::size_t begin, std::size_t end) {
         ErrorSums local;
         std::vector<double> mean(n_sh), sh(n_sh), ref(d), params(d), fitted(n_sh);
         for (std::size_t v = begin; v < end; ++v) {
@@ -214,7 +214,7 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
         }
         std::lock_guard<std::mutex> lock(merge_mutex);
         zh_errors.merge(local);
-    }, progress, 0.0, 0.8);
+    }, progress);
     report.zh_fit = zh_errors.result();
     report.seconds_zh_fit = seconds_since(t_zh);
 
@@ -285,7 +285,7 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
     // Errors of params predicted for `rows` (rows.size() × V·d) against their baked SH.
     auto sh_errors = [&](const std::vector<std::size_t>& rows, const Eigen::MatrixXf& predicted) {
         ErrorSums total;
-        parallel_chunks(V, 256, settings.threads, [&](std::size_t begin, std::size_t end) {
+        parallel_for(V, {settings.threads, 256, "visibility.model_errors"}, [&](std::size_t begin, std::size_t end) {
             ErrorSums local;
             std::vector<double> params(d), sh(n_sh);
             for (std::size_t v = begin; v < end; ++v)
@@ -296,7 +296,7 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
                 }
             std::lock_guard<std::mutex> lock(merge_mutex);
             total.merge(local);
-        }, Progress{});
+        });
         return total.result();
     };
 
@@ -318,7 +318,7 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
         Eigen::MatrixXd Ac(R, k);
         for (std::size_t r = 0; r < R; ++r) Ac.row(r) = A.row(rows[r]);
         if (k) Ac.rowwise() -= sol.feature_mean.transpose();
-        parallel_chunks(V, 64, settings.threads, [&](std::size_t begin, std::size_t end) {
+        parallel_for(V, {settings.threads, 64, "visibility.prune", from, to}, [&](std::size_t begin, std::size_t end) {
             ErrorSums local;
             Eigen::MatrixXd dropped(R, d), trial(R, d), prediction(R, d);
             std::vector<Eigen::MatrixXd> parts(n_active);
@@ -364,13 +364,13 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
             }
             std::lock_guard<std::mutex> lock(merge_mutex);
             errors.merge(local);
-        }, prune_progress, from, to);
+        }, prune_progress);
         return out;
     };
     // Errors of a pruned model (as stored) on frames it was not fitted on.
     auto pruned_errors = [&](const Pruned& pruned, const Eigen::MatrixXf& W, const std::vector<std::size_t>& rows) {
         ErrorSums total;
-        parallel_chunks(V, 256, settings.threads, [&](std::size_t begin, std::size_t end) {
+        parallel_for(V, {settings.threads, 256, "visibility.pruned_errors"}, [&](std::size_t begin, std::size_t end) {
             ErrorSums local;
             std::vector<double> params(d), sh(n_sh);
             for (std::size_t v = begin; v < end; ++v)
@@ -386,7 +386,7 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
                 }
             std::lock_guard<std::mutex> lock(merge_mutex);
             total.merge(local);
-        }, Progress{});
+        });
         return total.result();
     };
 
@@ -506,7 +506,7 @@ void synthesize_lobes(const PoseModel& model, const float* joint_rotations, floa
     // Single precision, like the stored weights and the output: at most a few
     // dozen products per parameter, and the loop vectorizes.
     const std::vector<float> phi_f(phi.begin(), phi.end());
-    parallel_chunks(model.vertex_count, 2048, threads, [&](std::size_t begin, std::size_t end) {
+    parallel_for(model.vertex_count, {threads, 2048, "visibility.pose_lobes"}, [&](std::size_t begin, std::size_t end) {
         for (std::size_t v = begin; v < end; ++v) {
             float* acc = params_out + v * d;
             const float* bias = model.bias.data() + v * d;
@@ -524,7 +524,7 @@ void synthesize_lobes(const PoseModel& model, const float* joint_rotations, floa
         if (axes_out && bands_out)
             params_to_lobes(model.order, model.lobes, end - begin, params_out + begin * d,
                             axes_out + begin * model.lobes * 3, bands_out + begin * model.lobes * model.order);
-    }, Progress{});
+    });
 }
 
 void params_to_lobes(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,

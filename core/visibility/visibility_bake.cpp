@@ -10,7 +10,7 @@
 #include "common/error.hpp"
 #include "sh/basis.hpp"
 #include "sh/point_sets.hpp"
-#include "visibility/parallel.hpp"
+#include "common/parallel.hpp"
 
 namespace penumbra::visibility {
 
@@ -107,7 +107,8 @@ void FrameBaker::bake(const FrameGeometry& geometry, const std::vector<std::uint
     const bool cast_below = settings.below_horizon == BelowHorizon::Cast && settings.weighting == Weighting::Plain;
     const int n_cast = cast_below ? int(rays.directions.size()) : rays.upper;
 
-    parallel_chunks(n_vertices, 64, settings.threads, [&](std::size_t begin, std::size_t end) {
+    parallel_for(n_vertices, {settings.threads, 64, "visibility.bake", progress_from, progress_to},
+                 [&](std::size_t begin, std::size_t end) {
         std::vector<Eigen::Vector3f> world(rays.directions.size());
         std::vector<std::uint8_t> occluded(rays.directions.size());
         std::vector<float> accumulator(n_sh);
@@ -132,7 +133,7 @@ void FrameBaker::bake(const FrameGeometry& geometry, const std::vector<std::uint
             }
             std::copy(accumulator.begin(), accumulator.end(), visibility_out + v * n_sh);
         }
-    }, progress, progress_from, progress_to);
+    }, progress);
 
     const auto t_end = Clock::now();
     local.seconds_setup = std::chrono::duration<double>(t_build - t_setup).count();
