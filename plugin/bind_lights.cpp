@@ -127,6 +127,11 @@ public:
 }  // namespace
 
 void bind_lights(py::module_& m) {
+    // Every default below is the core's own, read from default-constructed options.
+    const RigOptions rig;
+    const LightOptions& light = rig.lights;
+    const MapOptions map;
+    const ClusterOptions cluster;
     py::class_<SourceHandle, std::shared_ptr<SourceHandle>>(m, "LightRigSource",
         "Frames of lighting: one image, a numbered sequence or a video (see open_light_source).")
         .def_property_readonly("frame_count", [](const SourceHandle& s) { return s.source->frame_count(); })
@@ -187,12 +192,12 @@ void bind_lights(py::module_& m) {
                     for (int j = 0; j < 3; ++j) o.world_from_map(i, j) = a.at(i, j);
             }
             return std::make_unique<PyRigBuilder>(o);
-        }), py::arg("count") = 64, py::arg("sampler") = "HAVRAN", py::arg("blue_noise") = false,
+        }), py::arg("count") = light.count, py::arg("sampler") = "HAVRAN", py::arg("blue_noise") = light.blue_noise,
             py::arg("power") = "REGION", py::arg("mapping") = "EQUIRECTANGULAR", py::arg("lens") = std::vector<double>{},
-            py::arg("max_width") = 2048, py::arg("temporal_filter") = true, py::arg("frames_per_second") = 0.0,
-            py::arg("pass_hz") = 5.9, py::arg("stop_hz") = 8.05, py::arg("cluster_max") = 0,
-            py::arg("cluster_correction") = 1.85, py::arg("adaptive_tolerance") = 0.0,
-            py::arg("world_from_map") = py::none(), py::arg("threads") = 0)
+            py::arg("max_width") = map.max_width, py::arg("temporal_filter") = rig.temporal_filter, py::arg("frames_per_second") = rig.frames_per_second,
+            py::arg("pass_hz") = rig.pass_hz, py::arg("stop_hz") = rig.stop_hz, py::arg("cluster_max") = rig.cluster_max,
+            py::arg("cluster_correction") = rig.cluster_correction, py::arg("adaptive_tolerance") = rig.adaptive_tolerance,
+            py::arg("world_from_map") = py::none(), py::arg("threads") = map.threads)
         .def("add_frame", [](PyRigBuilder& b, const py::array& pixels) {
             Image image = array_to_image(pixels, "pixels");
             py::gil_scoped_release release;
@@ -288,9 +293,9 @@ void bind_lights(py::module_& m) {
         out["bands"] = report.bands;
         out["buffer_bytes"] = report.buffer_bytes;
         return out;
-    }, py::arg("path"), py::arg("mapping") = "EQUIRECTANGULAR", py::arg("max_width") = 2048,
+    }, py::arg("path"), py::arg("mapping") = "EQUIRECTANGULAR", py::arg("max_width") = map.max_width,
     py::arg("config") = py::none(), py::arg("colorspace") = "", py::arg("band_bytes") = std::size_t(16) << 20,
-    py::arg("threads") = 0,
+    py::arg("threads") = map.threads,
     "The working map of an image file (lights/map_reader.hpp): lat-long files wider than max_width are read band "
     "by band and reduced as they arrive. Dict: pixels (h, w, 3) scene-linear, full_sphere, defects, "
     "source_integral_luminance, streamed, bands, buffer_bytes (largest input buffers held at once).");
@@ -318,8 +323,8 @@ void bind_lights(py::module_& m) {
         out["defects"] = defects_dict(map.defects);
         out["working_size"] = py::make_tuple(map.width, map.height);
         return out;
-    }, py::arg("pixels"), py::arg("mapping") = "EQUIRECTANGULAR", py::arg("count") = 64, py::arg("sampler") = "HAVRAN",
-    py::arg("blue_noise") = false, py::arg("power") = "REGION", py::arg("max_width") = 2048, py::arg("threads") = 0,
+    }, py::arg("pixels"), py::arg("mapping") = "EQUIRECTANGULAR", py::arg("count") = light.count, py::arg("sampler") = "HAVRAN",
+    py::arg("blue_noise") = light.blue_noise, py::arg("power") = "REGION", py::arg("max_width") = map.max_width, py::arg("threads") = map.threads,
     py::arg("shift") = std::pair<double, double>{0.0, 0.0},
     "Lights of one scene-linear environment map (no temporal filtering): dict of directions, rgb, power, spread. "
     "`shift` moves the point set (mod 1); a rig uses (0, 0).");
@@ -335,7 +340,7 @@ void bind_lights(py::module_& m) {
         }
         return matrix_to_array(e);
     }, py::arg("pixels"), py::arg("normals"), py::arg("mapping") = "EQUIRECTANGULAR", py::arg("max_width") = 0,
-    py::arg("threads") = 0, "Irradiance (N, 3) of a diffuse surface for each normal under the whole map.");
+    py::arg("threads") = map.threads, "Irradiance (N, 3) of a diffuse surface for each normal under the whole map.");
 
     m.def("light_rig_irradiance", [](const py::array& directions, const py::array& rgb, const py::array& normals) {
         const auto lights = to_lights(directions, rgb);
@@ -359,8 +364,8 @@ void bind_lights(py::module_& m) {
         out["cluster_of"] = c.cluster_of;
         out["radius"] = c.radius;
         return out;
-    }, py::arg("directions"), py::arg("rgb"), py::arg("max_clusters"), py::arg("correction") = 1.85,
-    py::arg("full_sphere") = true, "Greedy clustering of lights (paper §4.3).");
+    }, py::arg("directions"), py::arg("rgb"), py::arg("max_clusters"), py::arg("correction") = cluster.correction,
+    py::arg("full_sphere") = cluster.full_sphere, "Greedy clustering of lights (paper §4.3).");
 
     m.def("light_rig_region_table", [](const py::array& directions, int cells_per_face, double lobe_half_angle) {
         const AngularRegionTable t(to_directions(directions, "directions"), cells_per_face, lobe_half_angle);
@@ -391,12 +396,13 @@ void bind_lights(py::module_& m) {
             out.mutable_at(i, 1) = p[i].y();
         }
         return out;
-    }, py::arg("count"), py::arg("blue_noise") = false, "Halton (2, 3) points from index 1, optionally Lloyd-relaxed.");
+    }, py::arg("count"), py::arg("blue_noise") = light.blue_noise, "Halton (2, 3) points from index 1, optionally Lloyd-relaxed.");
 
     m.def("light_rig_filter", [](double frames_per_second, double pass_hz, double stop_hz, int taps) {
         if (taps > 0) return design_lowpass(frames_per_second, pass_hz, stop_hz, taps).taps;
         return filter_for_rate(frames_per_second, pass_hz, stop_hz).taps;
-    }, py::arg("frames_per_second") = 21.0, py::arg("pass_hz") = 5.9, py::arg("stop_hz") = 8.05, py::arg("taps") = 0,
+    }, py::arg("frames_per_second") = paper_rate_hz, py::arg("pass_hz") = paper_pass_hz,
+    py::arg("stop_hz") = paper_stop_hz, py::arg("taps") = 0,
     "The temporal FIR taps used at a frame rate (the paper's at 21 Hz), or a Remez design with `taps` taps.");
 
     m.def("rotate_equirectangular_z", [](const py::array& pixels, double angle) {

@@ -149,9 +149,10 @@ void bind_shading(py::module_& m) {
         return py::object(py::make_tuple(rgb, info));
     },
     py::arg("order"), py::arg("lighting"), py::arg("lobe_axes"), py::arg("lobe_bands"), py::arg("normals"),
-    py::arg("tangents"), py::kw_only(), py::arg("brdf") = "diffuse", py::arg("exponent") = 1.0,
+    py::arg("tangents"), py::kw_only(), py::arg("brdf") = "diffuse",
+    py::arg("exponent") = sh::ShadingParameters{}.phong_exponent,
     py::arg("positions") = py::none(), py::arg("camera") = py::none(),
-    py::arg("transmission") = std::array<double, 3>{1.0, 1.0, 1.0}, py::arg("threads") = 0,
+    py::arg("transmission") = sh::ShadingParameters{}.transmission, py::arg("threads") = sh::ShadingParameters{}.threads,
     py::arg("with_stats") = false,
     "Shades one pose (paper Sec. 4): per vertex, lighting^T T v with v the ZH visibility (Eq. 1) of its lobes.\n"
     "order: SH order (bands); lighting: (order^2, 3) RGB world radiance coefficients (e.g. project_environment);\n"

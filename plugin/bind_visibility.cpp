@@ -198,6 +198,10 @@ py::dict summary_dict(const vis::PoseModel& m) {
 }  // namespace
 
 void bind_visibility(py::module_& m) {
+    // Every default below is the core's own, read from default-constructed settings.
+    const vis::BakeSettings bake;
+    const vis::FitSettings fit;
+    const vis::ZhFitSettings zh;
     // Mesh helpers -----------------------------------------------------------
     m.def("visibility_reference_neighbours", [](std::size_t vertex_count, const Indices& polygon_sizes,
                                                 const Indices& polygon_vertices) {
@@ -269,9 +273,9 @@ void bind_visibility(py::module_& m) {
             s.settings.offset_scale = offset_scale;
             vis::check_bake_settings(s.settings);
             return s;
-        }), py::arg("vertex_count"), py::arg("topology_hash"), py::arg("bone_names"), py::arg("order") = 4,
-            py::arg("rays") = 256, py::arg("below_horizon") = "occluded", py::arg("weighting") = "plain",
-            py::arg("offset_scale") = 1e-4)
+        }), py::arg("vertex_count"), py::arg("topology_hash"), py::arg("bone_names"), py::arg("order") = bake.order,
+            py::arg("rays") = bake.rays, py::arg("below_horizon") = "occluded", py::arg("weighting") = "plain",
+            py::arg("offset_scale") = bake.offset_scale)
         .def("bake_frame", [](vis::TrainingSet& s, double frame, const Floats& positions, const Floats& normals,
                               const Indices& triangles, const Indices& neighbours, const Floats& bone_rotations,
                               const std::vector<std::pair<Floats, Indices>>& occluders, int threads,
@@ -316,7 +320,7 @@ void bind_visibility(py::module_& m) {
             return d;
         }, py::arg("frame"), py::arg("positions"), py::arg("normals"), py::arg("triangles"), py::arg("neighbours"),
            py::arg("bone_rotations"), py::arg("occluders") = std::vector<std::pair<Floats, Indices>>{},
-           py::arg("threads") = 0, py::arg("progress") = py::none(), py::arg("scene_build") = "medium",
+           py::arg("threads") = bake.threads, py::arg("progress") = py::none(), py::arg("scene_build") = "medium",
            "Bakes one frame (world-space positions, normals, triangles; occluders as (positions, triangles) pairs) "
            "and appends it. Returns ray counts. Releases the GIL; progress(fraction) -> False cancels.")
         .def("save", [](const vis::TrainingSet& s, const std::string& path) {
@@ -402,7 +406,7 @@ void bind_visibility(py::module_& m) {
             return py::make_tuple(to_array(axes, {py::ssize_t(V), x.lobes, 3}),
                                   to_array(bands, {py::ssize_t(V), x.lobes, x.order}),
                                   to_array(params, {py::ssize_t(V), x.lobes, vis::params_per_lobe(x.order)}));
-        }, py::arg("joint_rotations"), py::arg("threads") = 0,
+        }, py::arg("joint_rotations"), py::arg("threads") = bake.threads,
            "Paper §4.3 step 1: lobes for a pose. joint_rotations (J, 3, 3) in `joints` order. Returns "
            "(axes (V, c, 3) local, bands (V, c, order), params (V, c, 2 + order)).")
         .def("evaluate", [](const vis::PoseModel& x, const vis::TrainingSet& s, int threads) {
@@ -412,7 +416,7 @@ void bind_visibility(py::module_& m) {
                 e = vis::evaluate_pose_model(x, s, threads);
             }
             return errors_dict(e);
-        }, py::arg("frames"), py::arg("threads") = 0,
+        }, py::arg("frames"), py::arg("threads") = bake.threads,
            "Errors of the model against baked frames (poses it may never have seen).")
         .def("shade", [](const vis::PoseModel& x, const Floats& joint_rotations, const Floats& positions,
                          const Floats& normals, const Indices& triangles, const Indices& neighbours,
@@ -452,12 +456,13 @@ void bind_visibility(py::module_& m) {
             return py::make_tuple(to_array(result.rgb, {py::ssize_t(x.vertex_count), 3}),
                                   to_array(result.visibility, {py::ssize_t(x.vertex_count)}), info);
         }, py::arg("joint_rotations"), py::arg("positions"), py::arg("normals"), py::arg("triangles"),
-           py::arg("neighbours"), py::arg("lighting"), py::arg("model") = "diffuse", py::arg("phong_exponent") = 1.0,
+           py::arg("neighbours"), py::arg("lighting"), py::arg("model") = "diffuse",
+           py::arg("phong_exponent") = sh::ShadingParameters{}.phong_exponent,
            // The defaults are the core's own (sh::ShadingParameters), never typed here again.
            py::arg("camera") = std::array<double, 3>{sh::ShadingParameters{}.camera[0], sh::ShadingParameters{}.camera[1],
                                                      sh::ShadingParameters{}.camera[2]},
            py::arg("transmission") = sh::ShadingParameters{}.transmission,
-           py::arg("threads") = 0,
+           py::arg("threads") = bake.threads,
            "The whole run time for one pose: lobes from the pose, frames from the deformed mesh, shading with the SH "
            "engine under lighting (order², 3). Returns (rgb (V, 3) float32, ao (V,) float32, info with timings).");
 
@@ -514,10 +519,12 @@ void bind_visibility(py::module_& m) {
         r["seconds_zh_fit"] = report.seconds_zh_fit;
         r["seconds_linear"] = report.seconds_linear;
         return py::make_tuple(model, r);
-    }, py::arg("training_set"), py::arg("bone_influence"), py::arg("lobes") = 2, py::arg("features") = "matrix",
-       py::arg("joint_tolerance_degrees") = 1.0, py::arg("holdout_stride") = 4, py::arg("constant_tolerance") = 0.01,
-       py::arg("prune_tolerance") = 0.01, py::arg("zh_iterations") = 8, py::arg("axis_prior") = 1.0,
-       py::arg("threads") = 0, py::arg("progress") = py::none(),
+    }, py::arg("training_set"), py::arg("bone_influence"), py::arg("lobes") = fit.lobes, py::arg("features") = "matrix",
+       py::arg("joint_tolerance_degrees") = fit.joint_tolerance_degrees, py::arg("holdout_stride") = fit.holdout_stride,
+       py::arg("constant_tolerance") = fit.constant_tolerance,
+       py::arg("prune_tolerance") = fit.prune_tolerance, py::arg("zh_iterations") = fit.zh_iterations,
+       py::arg("axis_prior") = fit.axis_prior,
+       py::arg("threads") = bake.threads, py::arg("progress") = py::none(),
        "Fits ZH lobes per vertex and frame and the linear pose model (paper §3.1). bone_influence: one "
        "(deforms_mesh, rigid_for_whole_mesh) pair per bone of the training set. Returns (model, report).");
 
@@ -547,8 +554,8 @@ void bind_visibility(py::module_& m) {
                                                 out.data() + i * d);
         }
         return py::make_tuple(to_array(out, {N, lobes, vis::params_per_lobe(order)}), to_array(residual, {N}));
-    }, py::arg("sh"), py::arg("lobes") = 2, py::arg("reference") = py::none(), py::arg("iterations") = 8,
-       py::arg("axis_prior") = 1.0,
+    }, py::arg("sh"), py::arg("lobes") = zh.lobes, py::arg("reference") = py::none(), py::arg("iterations") = zh.iterations,
+       py::arg("axis_prior") = zh.axis_prior,
        "Fits ZH lobes to SH vectors (N, order²). Returns (params (N, lobes, 2 + order): Lambert (X, Y) then "
        "bands; squared residuals (N,)).");
 

@@ -14,6 +14,7 @@ void bind_shading(pybind11::module_& m);       // batched pose shading
 void bind_visibility(pybind11::module_& m);    // visibility baker
 void bind_lights(pybind11::module_& m);        // light rigs
 void bind_colormap(pybind11::module_& m);      // colour-map lookups
+void bind_settings(pybind11::module_& m);      // settings_spec: the core's defaults and ranges
 void bind_testing(pybind11::module_& m);       // _penumbra.testing: hooks for tests
 
 }  // namespace penumbra::bindings

@@ -47,5 +47,6 @@ PYBIND11_MODULE(_penumbra, m) {
     penumbra::bindings::bind_visibility(m);
     penumbra::bindings::bind_lights(m);
     penumbra::bindings::bind_colormap(m);
+    penumbra::bindings::bind_settings(m);
     penumbra::bindings::bind_testing(m);
 }

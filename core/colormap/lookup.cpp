@@ -142,11 +142,11 @@ void filtered_color(const ColorMap& map, double mean, double sigma, double* out)
 }
 
 void LookupSpec::validate() const {
-    if (width < 2 || height < 2)
-        throw ArgumentError("a lookup table needs at least 2 columns and 2 rows, not " + std::to_string(width) +
-                            " x " + std::to_string(height));
-    if (!std::isfinite(sigma_max) || sigma_max <= 0.0)
+    check_range("the lookup table's width", width, size_range);
+    check_range("the lookup table's height", height, size_range);
+    if (!std::isfinite(sigma_max))
         throw ArgumentError("sigma_max must be a finite number > 0 (the widest filter the table holds)");
+    check_range("sigma_max (the widest filter the table holds)", sigma_max, sigma_max_range);
     if (!std::isfinite(mean_min) || !std::isfinite(mean_max) || !(mean_max > mean_min))
         throw ArgumentError("the mean range must be finite with mean_min < mean_max");
 }

@@ -17,6 +17,7 @@
 // by the chosen spacing (row 0 is σ = 0). A renderer reads it bilinearly.
 #pragma once
 
+#include "common/setting.hpp"
 #include "colormap/color_map.hpp"
 #include "common/progress.hpp"
 #include "image/image.hpp"
@@ -36,6 +37,8 @@ struct LookupSpec {
     int width = 256;
     int height = 256;
     double sigma_max = 0.25;
+    static constexpr Range<int> size_range{2, 8192};  // width and height
+    static constexpr Range<double> sigma_max_range{1e-6, unbounded};
     double mean_min = 0.0;
     double mean_max = 1.0;
     SigmaSpacing sigma_spacing = SigmaSpacing::linear;

@@ -31,6 +31,7 @@
 
 #include <Eigen/Core>
 
+#include "common/setting.hpp"
 #include "lights/environment.hpp"
 #include "lights/sampling.hpp"
 
@@ -40,7 +41,8 @@ enum class PowerMode { equal, region };
 PowerMode parse_power_mode(const char* name);  // "equal" / "region", any case
 
 struct LightOptions {
-    int count = 64;                 // N >= 1 and at most the map's cell count
+    int count = 64;                 // N, at most the map's cell count
+    static constexpr Range<int> count_range{1, unbounded_int};
     SamplerKind sampler = SamplerKind::havran;
     bool blue_noise = false;
     PowerMode power = PowerMode::region;

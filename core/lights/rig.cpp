@@ -15,8 +15,8 @@ namespace penumbra::lights {
 RigBuilder::RigBuilder(RigOptions options) : options_(std::move(options)) {
     if (options_.lights.count < 1)
         throw ArgumentError("the light count must be at least 1, got " + std::to_string(options_.lights.count));
-    if (options_.cluster_max < 0) throw ArgumentError("cluster_max must be 0 (off) or positive");
-    if (options_.adaptive_tolerance < 0.0) throw ArgumentError("the adaptive tolerance must be 0 (off) or positive");
+    check_range("cluster_max (0: off)", options_.cluster_max, RigOptions::cluster_max_range);
+    check_range("the adaptive tolerance (0: off)", options_.adaptive_tolerance, RigOptions::adaptive_tolerance_range);
     const Eigen::Matrix3d& m = options_.world_from_map;
     if (!m.allFinite() || (m.transpose() * m - Eigen::Matrix3d::Identity()).norm() > 1e-6 || m.determinant() < 0)
         throw ArgumentError("world_from_map must be a rotation matrix");

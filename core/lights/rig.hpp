@@ -21,6 +21,7 @@
 
 #include "color/color_config.hpp"
 #include "common/progress.hpp"
+#include "common/setting.hpp"
 #include "image/frame_source.hpp"
 #include "lights/clustering.hpp"
 #include "lights/environment.hpp"
@@ -35,10 +36,12 @@ struct RigOptions {
     LightOptions lights;            // lights.count is the count, or the budget when adaptive
     bool temporal_filter = true;
     double frames_per_second = 0.0; // 0: the source's rate, else 21 (the paper's)
-    double pass_hz = 5.9, stop_hz = 8.05;  // temporal.hpp: the paper's filter's edges
+    double pass_hz = paper_pass_hz, stop_hz = paper_stop_hz;  // temporal.hpp: the paper's filter's edges
     int cluster_max = 0;            // Q; 0 = no clustering
+    static constexpr Range<int> cluster_max_range{0, unbounded_int};
     double cluster_correction = 1.85;
     double adaptive_tolerance = 0.0;  // > 0: per frame the fewest lights within this irradiance error
+    static constexpr Range<double> adaptive_tolerance_range{0.0, 1.0};
     Eigen::Matrix3d world_from_map = Eigen::Matrix3d::Identity();
 };
 

@@ -60,7 +60,10 @@ FirFilter design_lowpass(double rate_hz, double pass_hz, double stop_hz, int tap
 
 // The filter the tool uses at `rate_hz`: the paper's at 21 Hz (±0.5 Hz) with
 // the paper's edges, else design_lowpass (edges scaled as described above).
-FirFilter filter_for_rate(double rate_hz, double pass_hz = 5.9, double stop_hz = 8.05);
+// The paper's capture rate and the band edges that reproduce its filter.
+inline constexpr double paper_rate_hz = 21.0, paper_pass_hz = 5.9, paper_stop_hz = 8.05;
+
+FirFilter filter_for_rate(double rate_hz, double pass_hz = paper_pass_hz, double stop_hz = paper_stop_hz);
 
 // Centred filtering with edge replication (see above).
 std::vector<double> filter_sequence(const std::vector<double>& signal, const FirFilter& filter);

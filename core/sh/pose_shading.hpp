@@ -57,6 +57,7 @@
 
 #include <Eigen/Core>
 
+#include "common/setting.hpp"
 #include "sh/basis.hpp"
 #include "sh/brdf_operator.hpp"
 
@@ -71,13 +72,14 @@ enum class ShadingModel { diffuse, phong, translucent };
 struct ShadingParameters {
     ShadingModel model = ShadingModel::diffuse;
     // Normalized Phong exponent α >= 0 (+infinity allowed: mirror limit).
-    double phong_exponent = 1.0;
+    double phong_exponent = 16.0;
+    static constexpr Range<double> phong_exponent_range{0.0, unbounded};
     // World position of the camera (phong: local viewer).
     Eigen::Vector3d camera = Eigen::Vector3d::Zero();
     // Translucent: RGB weight of the transmitted (back-face) lobe, finite.
-    std::array<double, 3> transmission{1.0, 1.0, 1.0};
-    // Worker threads: 0 = std::thread::hardware_concurrency(). Results do not
-    // depend on it (each vertex is computed the same way on any thread).
+    std::array<double, 3> transmission{0.5, 0.5, 0.5};
+    // Worker threads (common/setting.hpp threads_range; 0: all). Results do
+    // not depend on it (each vertex is computed the same way on any thread).
     int threads = 0;
 };
 

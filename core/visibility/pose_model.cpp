@@ -71,7 +71,7 @@ const std::vector<double>& ridge_grid() {
 }
 
 void check_fit_settings(const FitSettings& s) {
-    if (s.lobes < 1 || s.lobes > max_lobes) throw ArgumentError("lobes must be in [1, 4], got " + std::to_string(s.lobes));
+    check_range("lobes", s.lobes, FitSettings::lobes_range);
     if (s.features != PoseFeatures::RotationMatrix && s.features != PoseFeatures::RotationVector)
         throw ArgumentError("unknown pose features");
     if (!(s.joint_tolerance_degrees >= 0.0)) throw ArgumentError("joint tolerance must be >= 0 degrees");
@@ -80,7 +80,7 @@ void check_fit_settings(const FitSettings& s) {
     if (!(s.constant_tolerance >= 0.0) || !(s.prune_tolerance >= 0.0))
         throw ArgumentError("tolerances must be >= 0");
     if (s.zh_iterations < 0 || !(s.axis_prior >= 0.0)) throw ArgumentError("ZH fit settings out of range");
-    if (s.threads < 0) throw ArgumentError("threads must be >= 0");
+    check_range("threads", s.threads, threads_range);
 }
 
 }  // namespace

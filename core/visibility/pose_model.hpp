@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "common/setting.hpp"
 #include "common/progress.hpp"
 #include "visibility/visibility_bake.hpp"
 #include "visibility/zh_fit.hpp"
@@ -74,6 +75,7 @@ std::vector<JointChoice> choose_active_joints(const TrainingSet& set, const std:
 
 struct FitSettings {
     int lobes = 2;
+    static constexpr Range<int> lobes_range{1, max_lobes};
     PoseFeatures features = PoseFeatures::RotationMatrix;
     double joint_tolerance_degrees = 1.0;
     int holdout_stride = 4;              // every k-th frame held out to choose λ; 0: none

@@ -15,17 +15,15 @@
 namespace penumbra::visibility {
 
 void check_bake_settings(const BakeSettings& s) {
-    if (s.order < 1 || s.order > 8)
-        throw ArgumentError("SH order must be in [1, 8], got " + std::to_string(s.order));
-    if (s.rays < 4 || s.rays > 65536)
-        throw ArgumentError("rays must be in [4, 65536], got " + std::to_string(s.rays));
+    check_range("SH order", s.order, BakeSettings::order_range);
+    check_range("rays", s.rays, BakeSettings::rays_range);
     if (!(s.offset_scale > 0.0 && s.offset_scale < 0.1))
         throw ArgumentError("offset_scale must be in (0, 0.1), got " + std::to_string(s.offset_scale));
     if (s.below_horizon != BelowHorizon::Occluded && s.below_horizon != BelowHorizon::Cast)
         throw ArgumentError("unknown below-horizon rule");
     if (s.weighting != Weighting::Plain && s.weighting != Weighting::Cosine)
         throw ArgumentError("unknown weighting");
-    if (s.threads < 0) throw ArgumentError("threads must be >= 0 (0: every core)");
+    check_range("threads", s.threads, threads_range);
 }
 
 RaySet make_ray_set(const BakeSettings& settings) {

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "common/setting.hpp"
 #include "common/progress.hpp"
 #include "visibility/mesh_frames.hpp"
 #include "visibility/occlusion_scene.hpp"
@@ -34,8 +35,10 @@ enum class Weighting : std::uint32_t {
 };
 
 struct BakeSettings {
-    int order = 4;          // SH order (bands 0..order−1), 1..8
-    int rays = 256;         // directions over the whole sphere (spherical Fibonacci), 4..65536
+    int order = 4;          // SH order (bands 0..order−1)
+    int rays = 256;         // directions over the whole sphere (spherical Fibonacci)
+    static constexpr Range<int> order_range{1, 8};
+    static constexpr Range<int> rays_range{4, 65536};
     BelowHorizon below_horizon = BelowHorizon::Occluded;
     Weighting weighting = Weighting::Plain;
     double offset_scale = 1e-4;  // ray origins sit offset_scale × (bounding-box diagonal) off the surface

@@ -44,7 +44,7 @@ def test_large_sigma_tends_to_the_clamped_maps_mean():
 @pytest.mark.parametrize("kwargs, message", [
     (dict(sigma_max=0.0), "sigma_max"),
     (dict(sigma_max=float("nan")), "sigma_max"),
-    (dict(width=1), "at least 2"),
+    (dict(width=1), r"width must be in \[2, 8192\]"),
     (dict(mean_min=1.0, mean_max=1.0), "mean"),
 ])
 def test_bad_arguments_raise_value_error(kwargs, message):

@@ -57,3 +57,35 @@ def test_import_twice_under_both_names_gives_one_module():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "ok"
+
+
+def _signatures(obj, seen=None):
+    """Every (name, docstring signature line) of the module's functions and methods."""
+    import types
+    seen = set() if seen is None else seen
+    for name in dir(obj):
+        item = getattr(obj, name)
+        if id(item) in seen or name.startswith("__"):
+            continue
+        seen.add(id(item))
+        if isinstance(item, types.ModuleType) and item.__name__.startswith("_penumbra"):
+            yield from _signatures(item, seen)
+        elif isinstance(item, type):
+            yield from _signatures(item, seen)
+        elif callable(item) and item.__doc__:
+            yield name, item.__doc__.splitlines()[0]
+
+
+def test_no_binding_default_is_an_array_or_a_typed_out_number_the_core_owns():
+    # An array default is built when the module loads: py::array_t<double>(3)
+    # was uninitialised memory (help() showed 6.9e-310). The settings the
+    # add-on mirrors must show the core's values (settings_spec).
+    signatures = list(_signatures(_penumbra))
+    assert len(signatures) > 50
+    arrays = [(name, sig) for name, sig in signatures if "array(" in sig]
+    assert arrays == []
+    spec = _penumbra.settings_spec()
+    shade = next(sig for name, sig in signatures if name == "shade_pose")
+    assert f"exponent: float = {spec['visibility.phong_exponent']['default']}" in shade
+    fit = next(sig for name, sig in signatures if name == "fit_visibility_model")
+    assert f"lobes: int = {spec['visibility.lobes']['default']}" in fit

@@ -1,14 +1,15 @@
 """Colour-map lookup settings stored in the .blend (scene.penumbra.colormap)."""
 
 import bpy
+from ..core_settings import limits
 
 
 class ColormapSceneSettings(bpy.types.PropertyGroup):
     lut_width: bpy.props.IntProperty(
-        name="Lookup Width", default=256, min=2, max=8192,
+        name="Lookup Width", **limits("colormap.lut_width"),
         description="Columns of the lookup image (mean axis); the paper uses 256")
     lut_height: bpy.props.IntProperty(
-        name="Lookup Height", default=256, min=2, max=8192,
+        name="Lookup Height", **limits("colormap.lut_height"),
         description="Rows of the lookup image (standard-deviation axis)")
     sigma_spacing: bpy.props.EnumProperty(
         name="Sigma Spacing",
@@ -21,11 +22,13 @@ class ColormapSceneSettings(bpy.types.PropertyGroup):
                ("EXACT", "Exact", "Blender's own ColorRamp evaluation (stops, or 1024 samples for curved modes)")],
         default="CYCLES")
     sigma_max: bpy.props.FloatProperty(
-        name="Sigma Max", default=0.25, min=1e-6, soft_max=2.0,
+        name="Sigma Max", **limits("colormap.sigma_max"), soft_max=2.0,
         description="Widest filter the lookup holds when the ramp is not driven by a Noise Texture "
                     "(noise-driven ramps use the measured noise statistics)")
-    mean_min: bpy.props.FloatProperty(name="Mean Min", default=0.0, description="Smallest driving mean in the lookup")
-    mean_max: bpy.props.FloatProperty(name="Mean Max", default=1.0, description="Largest driving mean in the lookup")
+    mean_min: bpy.props.FloatProperty(name="Mean Min", **limits("colormap.mean_min"),
+                                      description="Smallest driving mean in the lookup")
+    mean_max: bpy.props.FloatProperty(name="Mean Max", **limits("colormap.mean_max"),
+                                      description="Largest driving mean in the lookup")
     output_folder: bpy.props.StringProperty(
         name="Folder", default="//penumbra_luts/", subtype="DIR_PATH",
         description="Where lookup images are written (next to the .blend by default; the temporary "

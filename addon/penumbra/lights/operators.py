@@ -18,6 +18,7 @@ import numpy as np
 from .. import color, native
 from ..compat import uses_nodes
 from . import rig_objects, settings
+from ..core_settings import limits
 
 PREVIEW_NAME = "Penumbra Light Rig Preview"
 _SETTING_NAMES = ("filepath", "mapping", "colorspace", "count", "sampler", "power", "blue_noise",
@@ -213,13 +214,13 @@ class PENUMBRA_OT_build_light_rig(bpy.types.Operator):
     filepath: bpy.props.StringProperty(name="Source", subtype="FILE_PATH", default="")
     mapping: bpy.props.EnumProperty(name="Mapping", items=settings.MAPPING_ITEMS, default="EQUIRECTANGULAR")
     colorspace: bpy.props.StringProperty(name="Colour Space", default="")
-    count: bpy.props.IntProperty(name="Lights", default=64, min=0)
+    count: bpy.props.IntProperty(name="Lights", **limits("lights.count"))
     sampler: bpy.props.EnumProperty(name="Sampler", items=settings.SAMPLER_ITEMS, default="HAVRAN")
     power: bpy.props.EnumProperty(name="Power", items=settings.POWER_ITEMS, default="REGION")
-    blue_noise: bpy.props.BoolProperty(name="Blue Noise", default=False)
-    temporal_filter: bpy.props.BoolProperty(name="Temporal Filter", default=True)
-    cluster_max: bpy.props.IntProperty(name="Cluster Max", default=0, min=0)
-    adaptive_tolerance: bpy.props.FloatProperty(name="Adaptive Tolerance", default=0.0, min=0.0, max=1.0)
+    blue_noise: bpy.props.BoolProperty(name="Blue Noise", **limits("lights.blue_noise"))
+    temporal_filter: bpy.props.BoolProperty(name="Temporal Filter", **limits("lights.temporal_filter"))
+    cluster_max: bpy.props.IntProperty(name="Cluster Max", **limits("lights.cluster_max"))
+    adaptive_tolerance: bpy.props.FloatProperty(name="Adaptive Tolerance", **limits("lights.adaptive_tolerance"))
     frame_start: bpy.props.IntProperty(name="Start", default=1)
     frame_end: bpy.props.IntProperty(name="End", default=250)
     limit_shadows: bpy.props.BoolProperty(name="Shadows for 8 Strongest", default=False)

@@ -3,6 +3,7 @@ operator penumbra.build_light_rig takes its defaults from here when run from
 the panel; a script can pass every setting to the operator directly."""
 
 import bpy
+from ..core_settings import limits
 
 MAPPING_ITEMS = (
     ("EQUIRECTANGULAR", "Equirectangular", "Full sphere, Blender's World convention (image centre faces +X)"),
@@ -30,18 +31,18 @@ class LightRigSceneSettings(bpy.types.PropertyGroup):
         name="Colour Space", default="",
         description="OpenColorIO colour space of the source (Blender's names, e.g. sRGB for an 8-bit video); "
                     "empty: the source is already scene-linear")
-    count: bpy.props.IntProperty(name="Lights", default=64, min=1, soft_max=1024,
+    count: bpy.props.IntProperty(name="Lights", **limits("lights.count"), soft_max=1024,
                                  description="Number of lights (the budget when Adaptive is on)")
     sampler: bpy.props.EnumProperty(name="Sampler", items=SAMPLER_ITEMS, default="HAVRAN")
     power: bpy.props.EnumProperty(name="Power", items=POWER_ITEMS, default="REGION")
-    blue_noise: bpy.props.BoolProperty(name="Blue Noise", default=False,
+    blue_noise: bpy.props.BoolProperty(name="Blue Noise", **limits("lights.blue_noise"),
                                        description="Start from Lloyd-relaxed Halton points")
-    temporal_filter: bpy.props.BoolProperty(name="Temporal Filter", default=True,
+    temporal_filter: bpy.props.BoolProperty(name="Temporal Filter", **limits("lights.temporal_filter"),
                                             description="Low-pass each light's direction and power over time")
-    cluster_max: bpy.props.IntProperty(name="Cluster Max", default=0, min=0,
+    cluster_max: bpy.props.IntProperty(name="Cluster Max", **limits("lights.cluster_max"),
                                        description="Merge nearby lights into at most this many (0: off)")
     adaptive_tolerance: bpy.props.FloatProperty(
-        name="Adaptive Tolerance", default=0.0, min=0.0, max=1.0, subtype="FACTOR",
+        name="Adaptive Tolerance", **limits("lights.adaptive_tolerance"), subtype="FACTOR",
         description="Per frame, the fewest lights whose irradiance error stays below this (0: fixed count)")
     frame_start: bpy.props.IntProperty(name="Start", default=1, description="Scene frame of the source's first frame")
     frame_end: bpy.props.IntProperty(name="End", default=250, description="Last scene frame to fill")

@@ -19,6 +19,7 @@ import bpy
 from .. import native
 from . import scene_data
 from .scene_data import VisibilityInputError
+from ..core_settings import limits
 
 DEFAULT_EXTENSION = ".pzh"
 
@@ -308,10 +309,11 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
     # Step, rays and lobes show their documented defaults; when a caller does
     # not set them, the object's own settings (same defaults) are used.
     frame_step: bpy.props.IntProperty(name="Step", default=1, min=1, description="Frame step (unset: the object's setting)")
-    rays: bpy.props.IntProperty(name="Rays", default=256, min=16, max=65536,
+    rays: bpy.props.IntProperty(name="Rays", **limits("visibility.rays"),
                                 description="Rays per vertex (unset: the object's setting)")
-    lobes: bpy.props.IntProperty(name="Lobes", default=2, min=1, max=4, description="ZH lobes (unset: the object's setting)")
-    sh_order: bpy.props.IntProperty(name="SH Order", default=4, min=2, max=8)
+    lobes: bpy.props.IntProperty(name="Lobes", **limits("visibility.lobes"),
+                                 description="ZH lobes (unset: the object's setting)")
+    sh_order: bpy.props.IntProperty(name="SH Order", **limits("visibility.sh_order"))
     occluders: bpy.props.StringProperty(name="Occluders", default="",
                                         description="Collection of other shadowing objects (empty: the object's setting)")
     filepath: bpy.props.StringProperty(name="File", subtype="FILE_PATH", default="",

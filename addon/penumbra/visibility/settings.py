@@ -5,6 +5,7 @@ how to shade it, and the report of the last bake. Per scene
 (`scene.penumbra.visibility`): run-time options shared by every object."""
 
 import bpy
+from ..core_settings import limits
 
 
 def _refresh(self, context):
@@ -15,7 +16,7 @@ def _refresh(self, context):
 
 class VisibilitySceneSettings(bpy.types.PropertyGroup):
     threads: bpy.props.IntProperty(
-        name="Threads", default=0, min=0, max=256,
+        name="Threads", **limits("threads"),
         description="Worker threads for baking and shading (0: every core)")
     live_update: bpy.props.BoolProperty(
         name="Live Update", default=True,
@@ -27,10 +28,10 @@ class VisibilityObjectSettings(bpy.types.PropertyGroup):
     frame_start: bpy.props.IntProperty(name="Start", default=1, description="First training frame")
     frame_end: bpy.props.IntProperty(name="End", default=24, description="Last training frame")
     frame_step: bpy.props.IntProperty(name="Step", default=1, min=1, description="Frames between training poses")
-    rays: bpy.props.IntProperty(name="Rays", default=256, min=16, max=65536,
+    rays: bpy.props.IntProperty(name="Rays", **limits("visibility.rays"),
                                 description="Ray directions per vertex over the whole sphere")
-    lobes: bpy.props.IntProperty(name="Lobes", default=2, min=1, max=4, description="ZH lobes per vertex")
-    sh_order: bpy.props.IntProperty(name="SH Order", default=4, min=2, max=8,
+    lobes: bpy.props.IntProperty(name="Lobes", **limits("visibility.lobes"), description="ZH lobes per vertex")
+    sh_order: bpy.props.IntProperty(name="SH Order", **limits("visibility.sh_order"),
                                     description="Spherical-harmonic order (bands) of the visibility")
     occluders: bpy.props.PointerProperty(name="Occluders", type=bpy.types.Collection,
                                          description="Other objects that shadow this mesh (optional)")
@@ -44,9 +45,10 @@ class VisibilityObjectSettings(bpy.types.PropertyGroup):
         items=(("DIFFUSE", "Diffuse", "Lambertian, shadowed by the baked visibility"),
                ("PHONG", "Phong", "Normalized Phong about the reflection of the scene camera"),
                ("TRANSLUCENT", "Translucent", "Thin-membrane translucency: shadowed front, unshadowed back")))
-    phong_exponent: bpy.props.FloatProperty(name="Exponent", default=16.0, min=0.0, soft_max=1000.0, update=_refresh)
+    phong_exponent: bpy.props.FloatProperty(name="Exponent", **limits("visibility.phong_exponent"), soft_max=1000.0,
+                                            update=_refresh)
     transmission: bpy.props.FloatVectorProperty(name="Transmission", subtype="COLOR", size=3, min=0.0,
-                                                default=(0.5, 0.5, 0.5), update=_refresh)
+                                                **limits("visibility.transmission"), update=_refresh)
     # Result of the last bake, saved with the .blend
     model_path: bpy.props.StringProperty(name="Model", subtype="FILE_PATH", default="")
     report: bpy.props.StringProperty(name="Report", default="", description="JSON summary of the last bake")
