@@ -19,6 +19,12 @@ def armature_of(obj):
     for modifier in obj.modifiers:
         if modifier.type == "ARMATURE" and modifier.object is not None and modifier.object.type == "ARMATURE":
             return modifier.object
+    emptied = [m.name for m in obj.modifiers if m.type == "ARMATURE"]
+    if emptied:
+        # Deleting the armature object leaves the modifier pointing at nothing.
+        raise VisibilityInputError(
+            f"the Armature modifier '{emptied[0]}' of '{obj.name}' points at no armature (was it deleted?): "
+            "undo the deletion, or set the modifier's Object to the armature that deforms the mesh")
     raise VisibilityInputError(
         f"'{obj.name}' has no Armature modifier pointing at an armature: the visibility baker models "
         "self-shadowing as a function of bone rotations")
