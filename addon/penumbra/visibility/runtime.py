@@ -26,19 +26,36 @@ _busy = False       # re-entry guard: writing attributes triggers depsgraph upda
 last_timings = {}   # seconds of the last shade, split into steps (read by benchmarks)
 
 
+def _mesh_counts(mesh):
+    """(vertices, polygons, loops, mesh name): changes with almost any topology
+    edit and costs nothing to read, so the handler can check it every frame."""
+    return len(mesh.vertices), len(mesh.polygons), len(mesh.loops), mesh.name
+
+
+def _topology_changed(path, obj):
+    return VisibilityInputError(
+        f"model '{path}' was made for another topology than '{obj.name}' has now (the mesh was edited "
+        "since the bake, or it is another mesh): undo the edit, or bake again")
+
+
 class _Loaded:
     def __init__(self, obj, path):
         core = native.require()
         self.path = path
         self.mtime = os.path.getmtime(path)
-        model = core.VisibilityPoseModel.load(path)
+        try:
+            model = core.VisibilityPoseModel.load(path)
+        except OSError as error:  # damaged, truncated, not a model: the core says which
+            raise VisibilityInputError(f"{error} — bake '{obj.name}' again to rewrite it") from None
         mesh = obj.data
         if model.vertex_count != len(mesh.vertices):
             raise VisibilityInputError(
                 f"model '{path}' was made for a mesh with {model.vertex_count} vertices; "
-                f"'{obj.name}' has {len(mesh.vertices)} (another mesh?) — bake again")
+                f"'{obj.name}' has {len(mesh.vertices)} (the mesh was edited since the bake, or it is another "
+                "mesh): undo the edit, or bake again")
         if model.topology_hash != scene_data.topology_hash(mesh):
-            raise VisibilityInputError(f"model '{path}' was made for another mesh (topology differs from '{obj.name}')")
+            raise _topology_changed(path, obj)
+        self.counts = _mesh_counts(mesh)
         armature = scene_data.armature_of(obj)
         missing = [j for j in model.joints if j not in armature.pose.bones]
         if missing:
@@ -75,7 +92,12 @@ def forget(obj=None):
         _models.pop(obj.name, None)
 
 
-def loaded_model(obj):
+def loaded_model(obj, check_topology=False):
+    """The object's model, loaded once and kept while its file and the mesh's
+    counts stay the same (a mesh edit that changes them loads and checks it
+    again). check_topology: also compare the full topology hash, which an
+    edit keeping every count (an edge rotated) changes too; the operator
+    does, the per-frame handler does not (it reads every polygon)."""
     s = obj.penumbra_visibility
     if not s.model_path:
         raise VisibilityInputError(f"'{obj.name}' has no visibility model: bake one first")
@@ -83,9 +105,14 @@ def loaded_model(obj):
     if not os.path.isfile(path):
         raise VisibilityInputError(f"the model file '{path}' of '{obj.name}' is missing — bake again")
     entry = _models.get(obj.name)
-    if entry is None or entry.path != path or entry.mtime != os.path.getmtime(path):
+    if entry is None or entry.path != path or entry.mtime != os.path.getmtime(path) or \
+            entry.counts != _mesh_counts(obj.data):
+        _models.pop(obj.name, None)
         entry = _Loaded(obj, path)
         _models[obj.name] = entry
+    elif check_topology and entry.model.topology_hash != scene_data.topology_hash(obj.data):
+        _models.pop(obj.name, None)
+        raise _topology_changed(path, obj)
     return entry
 
 
@@ -106,12 +133,13 @@ def _ensure_attributes(mesh):
     return SHADING_ATTRIBUTE, VISIBILITY_ATTRIBUTE
 
 
-def shade_object(obj, scene, depsgraph=None):
+def shade_object(obj, scene, depsgraph=None, check_topology=False):
     """Shades `obj` at the scene's current state and writes its attributes.
-    Returns (rgb, ao, info). Raises VisibilityInputError / OSError / ValueError."""
+    Returns (rgb, ao, info). Raises VisibilityInputError / OSError /
+    ValueError, before anything is written."""
     global last_timings
     t0 = time.perf_counter()
-    entry = loaded_model(obj)
+    entry = loaded_model(obj, check_topology)
     model = entry.model
     armature = scene_data.armature_of(obj)
     rotations = scene_data.bone_rotations(armature, model.joints)
@@ -120,8 +148,12 @@ def shade_object(obj, scene, depsgraph=None):
     frame = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False, buffers=entry.buffers)
     read_mesh = time.perf_counter() - t_read
     if len(frame.positions) != model.vertex_count:
-        raise VisibilityInputError(f"'{obj.name}' has {len(frame.positions)} vertices after its modifiers; "
-                                   f"the model has {model.vertex_count}")
+        # The mesh itself matches the model (loaded_model checked it): a modifier adds or removes vertices.
+        changing = [m.name for m in obj.modifiers if m.show_viewport and m.type != "ARMATURE"]
+        raise VisibilityInputError(
+            f"'{obj.name}' has {len(frame.positions)} vertices after its modifiers; the model has "
+            f"{model.vertex_count}: disable {', '.join(changing) or 'the modifiers that add or remove vertices'}, "
+            "or apply them and bake again")
     lighting, _ = scene_data.world_lighting(scene, model.order)
     s = obj.penumbra_visibility
     camera = np.array(scene.camera.matrix_world.translation) if scene.camera else np.zeros(3)
@@ -231,9 +263,9 @@ class PENUMBRA_OT_apply_visibility(bpy.types.Operator):
     def execute(self, context):
         obj = context.active_object
         try:
-            rgb, ao, info = shade_object(obj, context.scene)
+            rgb, ao, info = shade_object(obj, context.scene, check_topology=True)
         except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
-            obj.penumbra_visibility.status = str(error)
+            obj.penumbra_visibility.status = str(error)  # the panel shows it
             self.report({"ERROR"}, str(error))
             return {"CANCELLED"}
         obj.penumbra_visibility.status = ""
