@@ -135,7 +135,8 @@ def _ensure_attributes(mesh):
 
 def shade_object(obj, scene, depsgraph=None, check_topology=False):
     """Shades `obj` at the scene's current state and writes its attributes.
-    Returns (rgb, ao, info). Raises VisibilityInputError / OSError /
+    Returns (rgb, ao, info); info["world_warning"] says what was wrong with
+    the World's pixels, if anything. Raises VisibilityInputError / OSError /
     ValueError, before anything is written."""
     global last_timings
     t0 = time.perf_counter()
@@ -154,7 +155,7 @@ def shade_object(obj, scene, depsgraph=None, check_topology=False):
             f"'{obj.name}' has {len(frame.positions)} vertices after its modifiers; the model has "
             f"{model.vertex_count}: disable {', '.join(changing) or 'the modifiers that add or remove vertices'}, "
             "or apply them and bake again")
-    lighting, _ = scene_data.world_lighting(scene, model.order)
+    lighting, _, world_warning = scene_data.world_lighting_checked(scene, model.order)
     s = obj.penumbra_visibility
     camera = np.array(scene.camera.matrix_world.translation) if scene.camera else np.zeros(3)
     t1 = time.perf_counter()
@@ -184,6 +185,7 @@ def shade_object(obj, scene, depsgraph=None, check_topology=False):
         "write_attributes": t3 - t2,
         "total": t3 - t0,
     }
+    info["world_warning"] = world_warning
     return rgb, ao, info
 
 
@@ -270,6 +272,8 @@ class PENUMBRA_OT_apply_visibility(bpy.types.Operator):
             return {"CANCELLED"}
         obj.penumbra_visibility.status = ""
         self.report({"INFO"}, f"Shaded {len(ao)} vertices of '{obj.name}' (mean visibility {float(ao.mean()):.3f})")
+        if info["world_warning"]:
+            self.report({"WARNING"}, info["world_warning"])
         return {"FINISHED"}
 
 

@@ -2,6 +2,8 @@
 (world space), the armature's rest-relative bone rotations, which bones can
 change this mesh's occlusion, and the World lighting. No bake logic here."""
 
+import os
+
 import numpy as np
 
 from .. import native
@@ -385,31 +387,67 @@ def world_lighting(scene, order):
     a Mapping node's rotation, the Background strength (or a Value node), an
     RGB node; unsupported set-ups fall back to the Background colour and say
     so in the note."""
+    lighting, note, pixel_warning = world_lighting_checked(scene, order)
+    return lighting, (f"{note}; {pixel_warning}" if pixel_warning else note)
+
+
+def _pixel_warning(image, stats):
+    """What was wrong with an environment image's pixels ('' when nothing)."""
+    bad, negative = stats["non_finite_pixels"], stats["negative_pixels"]
+    if not bad and not negative:
+        return ""
+    parts = []
+    if bad:
+        parts.append(f"{bad} NaN or infinite pixel(s), lit as black")
+    if negative:
+        parts.append(f"{negative} pixel(s) with negative values, kept")
+    return (f"the World's environment image '{image.name}' has {' and '.join(parts)}; "
+            "fix or replace the image for correct lighting")
+
+
+def world_lighting_checked(scene, order):
+    """world_lighting, and a warning about the environment image's pixels
+    (NaN, infinite or negative values; '' when none) kept apart from the note."""
     core = native.require()
     n_sh = order * order
     lighting = np.zeros((n_sh, 3))
     sqrt_4pi = np.sqrt(4.0 * np.pi)
     r = read_world(scene)
     if r.kind == "black":
-        return lighting, r.note
+        return lighting, r.note, ""
     if r.kind == "uniform":
         lighting[0] = r.colour * r.strength * sqrt_4pi
-        return lighting, r.note
+        return lighting, r.note, ""
     image = r.environment.image
     from .. import color
     # The working space (Blender 5.0+) changes what the pixels mean, and a
     # float image's pixels themselves.
     key = (image.name, image.filepath, tuple(image.size), image.colorspace_settings.name,
            color.file_working_space(), order)
-    coefficients = _lighting_cache.get(key)
-    if coefficients is None:
+    cached = _lighting_cache.get(key)
+    if cached is None:
         pixels = _image_pixels_top_down(image)
         if pixels.size == 0:
-            raise VisibilityInputError(f"the World's environment image '{image.name}' has no pixels (missing file?)")
-        coefficients = core.project_environment(order, pixels)
+            raise VisibilityInputError(
+                f"the World's environment image '{image.name}' has no pixels: {_unreadable(image)}")
+        coefficients, stats = core.project_environment(order, pixels, with_stats=True)
+        cached = coefficients, _pixel_warning(image, stats)
         _lighting_cache.clear()
-        _lighting_cache[key] = coefficients
+        _lighting_cache[key] = cached
+    coefficients, pixel_warning = cached
     rotation = r.rotation
     # The texture is looked up at R·d: L(d) = E(R d), so its SH are D(Rᵀ)·c.
     lit = core.rotate_sh(coefficients, rotation.T) if not np.allclose(rotation, np.eye(3)) else coefficients
-    return np.asarray(lit) * r.strength, r.note
+    return np.asarray(lit) * r.strength, r.note, pixel_warning
+
+
+def _unreadable(image):
+    """Why an image has no pixels, and what to do."""
+    import bpy
+    if image.source in {"FILE", "SEQUENCE", "MOVIE"} and image.packed_file is None:
+        path = bpy.path.abspath(image.filepath, library=image.library)
+        if not os.path.isfile(path):
+            return f"its file '{path}' is missing; point the image at an existing file"
+        return (f"Blender could not read its file '{path}' (empty, zero-sized or damaged?); "
+                "replace it with a readable image")
+    return "the image is empty; fill it or choose another image"
