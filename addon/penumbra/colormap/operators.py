@@ -88,14 +88,40 @@ def _coordinate_scale(noise, obj):
                  "unit per world unit (adjust the Noise Filter's Scale input)")
 
 
+def _ramp_fingerprint(node):
+    """What the lookup and the node group are built from: the ramp's stops and
+    modes, what drives its Fac, and the settings of a driving noise. Equal
+    fingerprints: a lookup built from one fits the other."""
+    source = ramp_io.driving_socket(node)
+    noise = ramp_io.driving_noise(node)
+    noise_settings = None
+    if noise is not None:
+        def linked(socket):
+            return (socket.links[0].from_node.name, socket.links[0].from_socket.identifier) if socket.is_linked else None
+        noise_settings = (noise.name, noise.noise_dimensions, getattr(noise, "noise_type", None),
+                          getattr(noise, "normalize", None),
+                          tuple((i.identifier, linked(i), getattr(i, "default_value", None) if not i.is_linked and
+                                 isinstance(getattr(i, "default_value", None), float) else None)
+                                for i in noise.inputs if i.enabled))
+    return (ramp_io.ramp_stops(node).tobytes(), tuple(ramp_io.ramp_modes(node)),
+            (source.node.name, source.identifier) if source is not None else None, noise_settings)
+
+
 class BakePlan:
-    """Everything checked and gathered from the scene before any change."""
+    """Everything checked and gathered from the scene before any change.
+
+    Run from the UI, the lookup is built in a thread while Blender keeps
+    running (a script, a timer or another window can edit the tree, or undo
+    can replace it), so the plan holds names, and apply() looks the material,
+    the ramp and the image up again and refuses if what the lookup was built
+    from changed (recheck)."""
 
     def __init__(self, context, settings, image_name=""):
         self.warnings = []
         self.scene = context.scene
         self.settings = settings
         self.image = None
+        self.image_name = image_name
         self.material = None
         self.node = None
         self.noise = None
@@ -103,6 +129,8 @@ class BakePlan:
             self._plan_image(image_name)
         else:
             self._plan_ramp(context)
+            self.material_name, self.node_name = self.material.name, self.node.name
+            self.fingerprint = _ramp_fingerprint(self.node)
         self.spec = {
             "width": settings.lut_width, "height": settings.lut_height,
             "sigma_max": self.sigma_max, "mean_min": self.mean_min, "mean_max": self.mean_max,
@@ -233,9 +261,34 @@ class BakePlan:
         image.alpha_mode = "CHANNEL_PACKED"
         return image, path
 
+    def recheck(self):
+        """Looks the image, or the material and its ramp, up again by name (the
+        references taken when planning may be stale) and raises BakeError if
+        the lookup no longer fits them. Changes nothing."""
+        again = "bake again"
+        if self.image_name:
+            self.image = bpy.data.images.get(self.image_name)
+            if self.image is None:
+                raise BakeError(f"Image '{self.image_name}' was removed or renamed while its lookup was being "
+                                f"built: {again}")
+            return
+        material = bpy.data.materials.get(self.material_name)
+        if material is None or material.node_tree is None:
+            raise BakeError(f"Material '{self.material_name}' was removed or renamed while the lookup of its "
+                            f"ColorRamp '{self.node_name}' was being built: {again}")
+        node = material.node_tree.nodes.get(self.node_name)
+        if node is None or node.bl_idname != "ShaderNodeValToRGB":
+            raise BakeError(f"ColorRamp '{self.node_name}' was removed from '{self.material_name}' while its "
+                            f"lookup was being built: {again}")
+        if _ramp_fingerprint(node) != self.fingerprint:
+            raise BakeError(f"ColorRamp '{self.node_name}' in '{self.material_name}' was changed (its stops, "
+                            f"or what drives its Fac) while its lookup was being built: {again}")
+        self.material, self.node, self.noise = material, node, ramp_io.driving_noise(node)
+
     def apply(self, lut):
         """Writes the files and edits the tree; if anything fails, puts the
         tree, the data blocks and the output folder back as they were."""
+        self.recheck()
         rollback = _Rollback(self)
         try:
             return self._apply(lut)
