@@ -37,6 +37,17 @@ def _editable_material(context):
     return material
 
 
+def _unreadable(image):
+    """Why an image has no pixels, and what to do."""
+    if image.source in {"FILE", "SEQUENCE", "MOVIE"} and image.packed_file is None:
+        path = bpy.path.abspath(image.filepath, library=image.library)
+        if not os.path.isfile(path):
+            return f"its file '{path}' is missing; point the image at an existing file"
+        return (f"Blender could not read its file '{path}' (empty, zero-sized or damaged?); "
+                "replace it with a readable image")
+    return "the image is empty; fill it or choose another image"
+
+
 def _pixel_size(scene):
     """2 tan(fov/2) / resolution along the fitted axis: a pixel's size at unit depth."""
     camera = scene.camera
@@ -148,7 +159,7 @@ class BakePlan:
             raise BakeError(f"No image named '{image_name}'")
         width, height = image.size
         if width < 1 or height < 1:
-            raise BakeError(f"Image '{image_name}' has no pixels (is its file missing?)")
+            raise BakeError(f"Image '{image_name}' has no pixels: {_unreadable(image)}")
         pixels = np.empty(width * height * 4, np.float32)
         image.pixels.foreach_get(pixels)
         row = pixels.reshape(height, width, 4)[height // 2]  # the middle row is the colour map
@@ -161,7 +172,9 @@ class BakePlan:
         self.image = image
         self.samples = np.concatenate([rgb, row[:, 3:4]], axis=1).astype(np.float32)
         if not np.isfinite(self.samples).all():
-            raise BakeError(f"Image '{image_name}' has NaN or infinite pixels in its middle row")
+            bad = int((~np.isfinite(self.samples).all(axis=1)).sum())
+            raise BakeError(f"Image '{image_name}' has {bad} NaN or infinite pixel(s) in its middle row (the colour "
+                            "map): fix or replace the image first")
         self.sigma_max = self.settings.sigma_max
         self.mean_min, self.mean_max = self.settings.mean_min, self.settings.mean_max
         self.name = bpy.path.clean_name(image.name)
@@ -536,9 +549,16 @@ class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):
         tree = material.node_tree
         group_node = tree.nodes.active
         ramp_name = group_node.get("penumbra_original_ramp") if group_node is not None else None
-        ramp = tree.nodes.get(ramp_name) if ramp_name else None
-        if ramp is None:
-            self.report({"ERROR"}, "The active node is not a Penumbra Filtered Ramp with its original ramp")
+        if not isinstance(ramp_name, str) or not ramp_name:
+            what = f"'{group_node.name}'" if group_node is not None else "nothing"
+            self.report({"ERROR"}, f"The active node of '{material.name}' is {what}, not a Penumbra Filtered Ramp: "
+                                   "click the filtered ramp whose ColorRamp should come back")
+            return {"CANCELLED"}
+        ramp = tree.nodes.get(ramp_name)
+        if ramp is None or ramp.bl_idname != "ShaderNodeValToRGB":
+            why = "was deleted or renamed" if ramp is None else f"is now a {ramp.bl_label} node"
+            self.report({"ERROR"}, f"The original ColorRamp '{ramp_name}' of '{group_node.name}' {why}: "
+                                   "undo that change to restore it, or keep the filtered ramp (nothing was changed)")
             return {"CANCELLED"}
         for out_name in ("Color", "Alpha"):
             targets = [link.to_socket for link in group_node.outputs[out_name].links]
