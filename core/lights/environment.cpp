@@ -6,6 +6,7 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "common/latlong.hpp"
 #include "common/parallel.hpp"
 
 namespace penumbra::lights {
@@ -59,7 +60,8 @@ LatLongSpans::LatLongSpans(int in_width, int in_height, int out_width, int out_h
         const double a = double(R) * H / h, b = double(R + 1) * H / h;
         rows[R].first = int(std::floor(a));
         for (int r = rows[R].first; r < H && r < b; ++r) {
-            const double t0 = theta_max * std::max<double>(a, r) / H, t1 = theta_max * std::min<double>(b, r + 1) / H;
+            const double t0 = latlong::theta_of_y(std::max<double>(a, r), H, theta_max);
+            const double t1 = latlong::theta_of_y(std::min<double>(b, r + 1), H, theta_max);
             rows[R].weight.push_back(std::cos(t0) - std::cos(t1));
         }
     }
@@ -106,15 +108,13 @@ double latlong_row_luminance(Projection projection, int in_width, int in_height,
     return row_sum;
 }
 
-double EnvironmentMap::theta_max() const { return full_sphere ? pi : 0.5 * pi; }
-double EnvironmentMap::theta_edge(int row) const { return theta_max() * row / height; }
+double EnvironmentMap::theta_max() const { return full_sphere ? latlong::full_sphere : latlong::upper_hemisphere; }
+double EnvironmentMap::theta_edge(int row) const { return latlong::theta_of_y(row, height, theta_max()); }
 double EnvironmentMap::solid_angle(int row) const {
-    return (2.0 * pi / width) * (std::cos(theta_edge(row)) - std::cos(theta_edge(row + 1)));
+    return latlong::pixel_solid_angle(row, height, width, theta_max());
 }
 Eigen::Vector3d EnvironmentMap::direction(int row, int column) const {
-    const double theta = theta_max() * (row + 0.5) / height;
-    const double phi = pi - 2.0 * pi * (column + 0.5) / width;
-    return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+    return latlong::pixel_direction(row, column, height, width, theta_max());
 }
 
 EnvironmentMap make_environment(const Image& radiance, const MapOptions& options, const Progress& progress) {
@@ -201,7 +201,7 @@ EnvironmentMap make_environment(const Image& radiance, const MapOptions& options
         parallel_for(std::size_t(std::min(64, h - R0)), {options.threads, 1, "lights.map_resample"},
                      [&](std::size_t b, std::size_t e) {
             for (int r = R0 + int(b); r < R0 + int(e); ++r) {
-                const double t0 = theta_max * r / h, t1 = theta_max * (r + 1) / h;
+                const double t0 = latlong::theta_of_y(r, h, theta_max), t1 = latlong::theta_of_y(r + 1, h, theta_max);
                 for (int c = 0; c < w; ++c) {
                     double acc[3] = {0, 0, 0}, wsum = 0.0;
                     for (int j = 0; j < ss; ++j) {
@@ -210,9 +210,8 @@ EnvironmentMap make_environment(const Image& radiance, const MapOptions& options
                         const double z = std::cos(t0) + (std::cos(t1) - std::cos(t0)) * (j + 0.5) / ss;
                         const double theta = std::acos(std::clamp(z, -1.0, 1.0));
                         for (int i = 0; i < ss; ++i) {
-                            const double phi = pi - 2.0 * pi * (c + (i + 0.5) / ss) / w;
-                            const Eigen::Vector3d d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
-                                                    std::cos(theta));
+                            const Eigen::Vector3d d =
+                                latlong::direction_of_angles(theta, latlong::phi_of_x(c + (i + 0.5) / ss, w));
                             double x, y;
                             if (!direction_to_image(options.projection, options.lens, in.width, in.height, d, x, y))
                                 continue;
@@ -251,8 +250,8 @@ double integral_luminance(const EnvironmentMap& map, const std::array<double, 3>
 
 Image rotate_equirectangular_z(const Image& image, double angle) {
     if (image.empty()) throw ArgumentError("cannot rotate an empty image");
-    // Content at φ moves to φ + angle; column x ↔ φ = π − 2π x/W, so the new
-    // column x takes the old column x + angle·W/2π.
+    // Content at φ moves to φ + angle; column x ↔ φ = π − 2π x/W
+    // (latlong::phi_of_x), so the new column x takes the old column x + angle·W/2π.
     Image out(image.width, image.height, image.channels);
     const double shift = angle * image.width / (2.0 * pi);
     for (int x = 0; x < image.width; ++x) {

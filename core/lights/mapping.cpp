@@ -6,17 +6,18 @@
 #include <numbers>
 #include <string>
 
-#include "common/math.hpp"
 #include "common/error.hpp"
+#include "common/latlong.hpp"
+#include "common/math.hpp"
 
 namespace penumbra::lights {
 namespace {
 
 constexpr double pi = std::numbers::pi;
 
-Eigen::Vector3d from_angles(double theta, double phi) {
-    const double s = std::sin(theta);
-    return {s * std::cos(phi), s * std::sin(phi), std::cos(theta)};
+// θ range of the two latitude–longitude projections.
+double latlong_theta_max(Projection projection) {
+    return projection == Projection::equirectangular ? latlong::full_sphere : latlong::upper_hemisphere;
 }
 
 // Normalized image-circle coordinates (u right, v up, in units of R).
@@ -95,10 +96,8 @@ bool image_to_direction(Projection projection, const FisheyeLens& lens, int widt
                         Eigen::Vector3d& direction) {
     switch (projection) {
     case Projection::equirectangular:
-        direction = from_angles(pi * y / height, pi - 2.0 * pi * x / width);
-        return true;
     case Projection::hemisphere_polar:
-        direction = from_angles(0.5 * pi * y / height, pi - 2.0 * pi * x / width);
+        direction = latlong::direction_at(x, y, width, height, latlong_theta_max(projection));
         return true;
     case Projection::fisheye: {
         double u, v;
@@ -128,16 +127,12 @@ bool image_to_direction(Projection projection, const FisheyeLens& lens, int widt
 
 bool direction_to_image(Projection projection, const FisheyeLens& lens, int width, int height,
                         const Eigen::Vector3d& d, double& x, double& y) {
-    const double z = std::clamp(d.z(), -1.0, 1.0);
-    const double theta = std::acos(z);
-    const double phi = std::atan2(d.y(), d.x());
+    const double theta = latlong::theta_of_direction(d);
     switch (projection) {
     case Projection::equirectangular:
     case Projection::hemisphere_polar: {
-        double u = 0.5 - phi / (2.0 * pi);  // in [0, 1]
-        u -= std::floor(u);
-        x = u * width;
-        const double theta_max = projection == Projection::equirectangular ? pi : 0.5 * pi;
+        x = latlong::x_of_phi(latlong::phi_of_direction(d), width);
+        const double theta_max = latlong_theta_max(projection);
         if (theta > theta_max + 1e-12) return false;
         y = std::min(theta / theta_max, 1.0) * height;
         return true;
@@ -170,9 +165,8 @@ bool direction_to_image(Projection projection, const FisheyeLens& lens, int widt
 double pixel_solid_angle(Projection projection, const FisheyeLens& lens, int width, int height, int column, int row) {
     switch (projection) {
     case Projection::equirectangular:
-        return (2.0 * pi / width) * (std::cos(pi * row / height) - std::cos(pi * (row + 1.0) / height));
     case Projection::hemisphere_polar:
-        return (2.0 * pi / width) * (std::cos(0.5 * pi * row / height) - std::cos(0.5 * pi * (row + 1.0) / height));
+        return latlong::pixel_solid_angle(row, height, width, latlong_theta_max(projection));
     case Projection::fisheye: {
         double u, v;
         to_circle(width, height, column + 0.5, row + 0.5, u, v);

@@ -6,12 +6,10 @@
 // (column c, row r) covers [c, c+1) × [r, r+1), row 0 = top row of the file)
 // ------------------------------------------------------------------------
 // equirectangular   the full sphere in Blender's World convention
-//                   (sh/projection.hpp): θ = π y/H from +z, φ = π − 2π x/W
-//                   (φ = atan2(y, x)): the image centre faces +x, the top row
-//                   is +z. Same formulas as sh::equirectangular_direction.
+//                   (common/latlong.hpp, the one place it is written down).
 // hemisphere_polar  the upper hemisphere only, as the paper's 360×90 "polar
-//                   projection": θ = (π/2) y/H, φ as above. It is the top half
-//                   of an equirectangular map; the bottom row is the horizon.
+//                   projection": the top half of an equirectangular map
+//                   (latlong::upper_hemisphere); the bottom row is the horizon.
 // fisheye           a circular fisheye looking straight up (+z): the image
 //                   circle is the largest circle centred in the image
 //                   (radius R = min(W, H)/2), its rim the horizon. The top of
@@ -30,7 +28,8 @@
 //                   reflects r = c − 2(c·n)n with c = (0, 1, 0).
 //
 // Solid angle per pixel (the Jacobians the PDF uses):
-//   equirectangular / polar   Δφ (cos θ_top − cos θ_bottom)   (the paper's sin θ)
+//   equirectangular / polar   Δφ (cos θ_top − cos θ_bottom)   (the paper's sin θ;
+//                             latlong::pixel_solid_angle)
 //   fisheye                   sin θ · (dθ/dρ) / ρ · (1/R²)
 //   mirror_ball               4 / R²  (dΩ = 4 dA in units of the ball radius)
 #pragma once

@@ -6,8 +6,9 @@
 #include <numbers>
 #include <string>
 
-#include "common/math.hpp"
 #include "common/error.hpp"
+#include "common/latlong.hpp"
+#include "common/math.hpp"
 #include "common/parallel.hpp"
 
 namespace penumbra::lights {
@@ -57,13 +58,13 @@ struct Grid {
     std::vector<std::vector<double>> col_cdf;    // conditional, width + 1 each
 
     explicit Grid(const LuminanceDistribution& d)
-        : width(d.width), height(d.height), theta_max(d.full_sphere ? pi : 0.5 * pi) {
+        : width(d.width), height(d.height),
+          theta_max(d.full_sphere ? latlong::full_sphere : latlong::upper_hemisphere) {
         // A black map samples as a uniform one (the lights carry no power).
         std::vector<double> weight = d.weight, rows = d.row_mass;
         if (!(d.total > 0.0) || !std::isfinite(d.total)) {
             for (int r = 0; r < height; ++r) {
-                const double omega = (2 * pi / width) * (std::cos(theta_max * r / height) -
-                                                         std::cos(theta_max * (r + 1.0) / height));
+                const double omega = latlong::pixel_solid_angle(r, height, width, theta_max);
                 std::fill(weight.begin() + std::size_t(r) * width, weight.begin() + std::size_t(r + 1) * width, omega);
                 rows[r] = omega * width;
             }
@@ -91,13 +92,11 @@ struct Grid {
     }
 
     Eigen::Vector3d direction(double theta, double x) const {
-        const double phi = pi - 2.0 * pi * x / width;
-        return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+        return latlong::direction_of_angles(theta, latlong::phi_of_x(x, width));
     }
     // Column coordinate x ∈ [0, W) of a direction's azimuth.
     double column_of(const Eigen::Vector3d& d) const {
-        const double phi = std::atan2(d.y(), d.x());
-        return std::min(wrap01(0.5 - phi / (2.0 * pi)) * width, std::nextafter(double(width), 0.0));
+        return std::min(latlong::x_of_phi(latlong::phi_of_direction(d), width), std::nextafter(double(width), 0.0));
     }
 };
 
@@ -109,11 +108,11 @@ public:
         double fy, fx;
         const int r = invert_cdf(g_.row_cdf, u, fy);
         const int c = invert_cdf(g_.col_cdf[r], v, fx);
-        return {g_.direction(g_.theta_max * (r + fy) / g_.height, c + fx), r, c};
+        return {g_.direction(latlong::theta_of_y(r + fy, g_.height, g_.theta_max), c + fx), r, c};
     }
 
     Eigen::Vector2d invert(const Eigen::Vector3d& d) const override {
-        const double theta = std::acos(std::clamp(d.z(), -1.0, 1.0));
+        const double theta = latlong::theta_of_direction(d);
         const double y = std::clamp(theta / g_.theta_max * g_.height, 0.0, std::nextafter(double(g_.height), 0.0));
         const int r = int(y);
         const double x = g_.column_of(d);
@@ -133,7 +132,7 @@ public:
         const double span = 1.0 - std::cos(g_.theta_max);
         t_edge_.resize(std::size_t(g_.height) + 1);
         for (int r = 0; r <= g_.height; ++r)
-            t_edge_[r] = (1.0 - std::cos(g_.theta_max * r / g_.height)) / span;
+            t_edge_[r] = (1.0 - std::cos(latlong::theta_of_y(r, g_.height, g_.theta_max))) / span;
         t_edge_[g_.height] = 1.0;
         t_centre_.resize(g_.height);
         for (int r = 0; r < g_.height; ++r) t_centre_[r] = 0.5 * (t_edge_[r] + t_edge_[r + 1]);

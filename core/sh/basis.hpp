@@ -10,8 +10,8 @@
 //   y_lm = √2 K_l|m| sin(|m|φ) P_l^|m|(cosθ)  (m < 0),
 //   K_lm = sqrt((2l+1)/(4π) · (l−|m|)!/(l+|m|)!), P_l^m ≥ 0 near θ = 0.
 // So y_1^{-1} = +sqrt(3/4π) y, y_1^0 = +sqrt(3/4π) z, y_1^1 = +sqrt(3/4π) x.
-// Directions are Blender world coordinates: +z up, θ measured from +z,
-// φ from +x towards +y.
+// Directions, θ and φ are Blender world coordinates as common/latlong.hpp
+// defines them (+z up, θ from +z, φ from +x towards +y).
 //
 // Evaluation never forms θ or φ: it uses cos(mφ)sin^mθ + i sin(mφ)sin^mθ =
 // (x + iy)^m and a normalized Legendre recurrence in z, so it is a polynomial

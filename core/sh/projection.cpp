@@ -6,6 +6,7 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "common/latlong.hpp"
 #include "sh/basis.hpp"
 
 namespace penumbra::sh {
@@ -16,9 +17,6 @@ constexpr double pi = std::numbers::pi;
 // Rows between two progress reports: a 16k-wide row at order 16 is about
 // 1.5M multiply-adds, so 32 rows stay well under a tenth of a second.
 constexpr int rows_per_report = 32;
-
-// φ range of column c: [π − 2π(c+1)/W, π − 2π c/W] (see the header).
-double column_phi_centre(int column, int width) { return pi - 2.0 * pi * (column + 0.5) / width; }
 
 }  // namespace
 
@@ -65,13 +63,11 @@ Eigen::MatrixXd project_lights(int order, const std::vector<Eigen::Vector3d>& di
 }
 
 Eigen::Vector3d equirectangular_direction(int row, int column, int height, int width) {
-    const double theta = pi * (row + 0.5) / height;
-    const double phi = column_phi_centre(column, width);
-    return {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)};
+    return latlong::pixel_direction(row, column, height, width);
 }
 
 double equirectangular_solid_angle(int row, int height, int width) {
-    return (2.0 * pi / width) * (std::cos(pi * row / height) - std::cos(pi * (row + 1.0) / height));
+    return latlong::pixel_solid_angle(row, height, width);
 }
 
 EnvironmentProjection project_equirectangular(int order, const float* pixels, int height, int width, int channels,
@@ -96,7 +92,7 @@ EnvironmentProjection project_equirectangular(int order, const float* pixels, in
     const double dphi = 2.0 * pi / width;
     std::vector<double> column_factor(std::size_t(width) * m_count);
     for (int c = 0; c < width; ++c) {
-        const double phi = column_phi_centre(c, width);
+        const double phi = latlong::phi_of_x(c + 0.5, width);  // column centre
         double* f = &column_factor[std::size_t(c) * m_count];
         f[order - 1] = dphi;
         for (int m = 1; m < order; ++m) {
@@ -123,7 +119,7 @@ EnvironmentProjection project_equirectangular(int order, const float* pixels, in
         // Row factors ∫ p̄_l|m|(cosθ) sin^(|m|+1)θ dθ over [θ_top, θ_bottom],
         // Gauss–Legendre in θ (smooth there, unlike in cosθ near the poles).
         std::fill(row_factor.begin(), row_factor.end(), 0.0);
-        const double theta_top = pi * r / height, half = 0.5 * pi / height;
+        const double theta_top = latlong::theta_of_y(r, height), half = 0.5 * pi / height;
         for (int k = 0; k < nodes; ++k) {
             const double theta = theta_top + half * (1.0 + xi[k]);
             const double s = std::sin(theta);

@@ -1,27 +1,8 @@
 // Projection of lighting and of sampled functions onto the SH basis of
 // basis.hpp: c_i = ∫_{S²} f(ω) y_i(ω) dω. Sums are accumulated in double.
 //
-// Blender's equirectangular convention (World > Environment Texture, default
-// Vector = the view direction, default mapping)
-// ------------------------------------------------------------------------
-// Cycles maps a world direction d = (x, y, z) to image coordinates
-//   u = 0.5 − atan2(y, x) / 2π,   v = 1 − acos(z) / π
-// (intern/cycles/kernel/camera/projection.h: direction_to_equirectangular =
-// direction_to_equirectangular_range(dir, (−2π, π, −π, π)); used by
-// svm_node_tex_environment in intern/cycles/kernel/svm/image.h), where v = 0
-// is the first row of Blender's pixel buffer, which is stored bottom-up
-// (intern/cycles/scene/image_oiio.cpp reads the file with a negative
-// scanline stride). So for an H×W image as OpenImageIO returns it (row 0 =
-// top row of the file), pixel (row r, column c) covers
-//   θ ∈ [π r/H, π (r+1)/H]                 (θ from +z: row 0 is straight up)
-//   φ ∈ [π − 2π (c+1)/W, π − 2π c/W]        (φ = atan2(y, x))
-// and its centre looks along
-//   (sinθ cosφ, sinθ sinφ, cosθ), θ = π (r + ½)/H, φ = π − 2π (c + ½)/W.
-// Landmarks: the image centre faces +x; the left edge (and right edge) −x;
-// the column a quarter from the left faces +y, three quarters −y; the top
-// row is +z (up), the bottom row −z. Moving right in the image turns from +x
-// towards −y, i.e. clockwise seen from above, as when standing inside the
-// sphere looking out.
+// Equirectangular images are mapped to directions as Blender's World maps
+// them: common/latlong.hpp, the one place that convention is written down.
 #pragma once
 
 #include <cstddef>
@@ -51,7 +32,8 @@ Eigen::MatrixXd project_lights(int order, const std::vector<Eigen::Vector3d>& di
                                const Eigen::MatrixXd& rgb);
 
 // Pixel (row, column) centre direction and the pixel's exact solid angle
-// Δφ · (cos θ_top − cos θ_bottom) under the mapping above.
+// Δφ · (cos θ_top − cos θ_bottom) of a full-sphere map: latlong::pixel_direction
+// and latlong::pixel_solid_angle.
 Eigen::Vector3d equirectangular_direction(int row, int column, int height, int width);
 double equirectangular_solid_angle(int row, int height, int width);
 
@@ -63,7 +45,7 @@ struct EnvironmentProjection {
 
 // Projects an equirectangular radiance image (row-major, `channels` floats per
 // pixel, 3 = RGB or 4 = RGBA with alpha ignored; row 0 = top row of the file)
-// oriented as Blender's World shows it (mapping above). Each pixel is a
+// oriented as Blender's World shows it (common/latlong.hpp). Each pixel is a
 // constant over its exact footprint on the sphere: the φ integral of
 // cos(mφ)/sin(mφ) is taken in closed form per column and the θ integral of
 // the Legendre factor by Gauss–Legendre in θ (smooth there up to the poles)
