@@ -14,8 +14,8 @@
 // defines them (+z up, θ from +z, φ from +x towards +y).
 //
 // Evaluation never forms θ or φ: it uses cos(mφ)sin^mθ + i sin(mφ)sin^mθ =
-// (x + iy)^m and a normalized Legendre recurrence in z, so it is a polynomial
-// in (x, y, z) and stays exact at and near the poles.
+// (x + iy)^m and the normalized Legendre recurrence in z of legendre.hpp, so
+// it is a polynomial in (x, y, z) and stays exact at and near the poles.
 #pragma once
 
 #include <Eigen/Core>
@@ -44,12 +44,5 @@ void check_order(int order);
 // direction is zero-length or has a NaN/Inf component. `what` names it in the
 // message.
 Eigen::Vector3d unit_direction(const Eigen::Vector3d& direction, const char* what = "direction");
-
-namespace detail {
-// Normalized associated Legendre factor p̄_lm(z) = K_lm P_l^m(z) / sin^mθ
-// (a polynomial in z), for 0 <= m <= l < order, stored at sh_index(l, m).
-// The equirectangular projection integrates it row by row.
-void legendre_scaled(int order, double z, double* out);
-}  // namespace detail
 
 }  // namespace penumbra::sh

@@ -23,6 +23,7 @@
 #include "common/error.hpp"
 #include "common/parallel.hpp"
 #include "sh/basis.hpp"
+#include "sh/legendre.hpp"
 #include "sh/rotation.hpp"
 
 namespace penumbra::sh {
@@ -47,11 +48,9 @@ struct PoseShadingSetup {
     std::vector<std::array<double, 3>> back;
     std::array<double, max_order> zh_scale{};        // sqrt(4π/(2l+1)), Eq. 1
     std::array<double, max_order> ao_weight{};       // √(4π) T_d[00, l0]
-    // Coefficients of the normalized Legendre recurrence of sh/basis.cpp,
-    // p̄_mm = diagonal[m], p̄_(m+1)m = first[m] z p̄_mm,
-    // p̄_lm = a_lm (z p̄_(l−1)m − b_lm p̄_(l−2)m).
-    std::array<double, max_order> diagonal{}, first{};
-    std::array<double, max_order * max_order> a{}, b{};
+    // The normalized Legendre recurrence (sh/legendre.hpp), copied in beside
+    // the other per-call constants.
+    LegendreRecurrence legendre;
 };
 
 }  // namespace detail
@@ -114,18 +113,19 @@ inline MaskD normalize_lanes(VecD& x, VecD& y, VecD& z, const VecD& fx, const Ve
 }
 
 // y_i(x, y, z) for unit directions in every lane: the Cartesian recurrence of
-// sh/basis.cpp (Legendre in z, then (x + iy)^m).
+// sh/basis.cpp (Legendre in z by sh/legendre.hpp, then (x + iy)^m).
 template <int kOrder>
 inline void eval_lanes(const PoseShadingSetup& setup, const VecD& x, const VecD& y, const VecD& z,
                        VecD* out) {
     const int order = kOrder ? kOrder : setup.order;
+    const LegendreRecurrence& legendre = setup.legendre;
     for (int m = 0; m < order; ++m) {
-        out[sh_index(m, m)] = splat(setup.diagonal[m]);
+        out[sh_index(m, m)] = splat(legendre.diagonal[m]);
         if (m + 1 >= order) break;
-        out[sh_index(m + 1, m)] = setup.first[m] * z * setup.diagonal[m];
+        out[sh_index(m + 1, m)] = legendre.first[m] * z * legendre.diagonal[m];
         for (int l = m + 2; l < order; ++l) {
             const int i = sh_index(l, m);
-            out[i] = setup.a[i] * (z * out[sh_index(l - 1, m)] - setup.b[i] * out[sh_index(l - 2, m)]);
+            out[i] = legendre.a[i] * (z * out[sh_index(l - 1, m)] - legendre.b[i] * out[sh_index(l - 2, m)]);
         }
     }
     // C_m + i S_m = (x + iy)^m.
@@ -292,15 +292,15 @@ void shade_range(const PoseShadingSetup& setup, const PoseBuffers<Real>& buffers
                 // v_l0 in the normal frame depends on the local axis' z only:
                 // y_l0 = p̄_l0(z), the m = 0 Legendre recurrence.
                 const VecD& zn = az;
-                VecD before = splat(setup.diagonal[0]), last = splat(0.0);
+                VecD before = splat(setup.legendre.diagonal[0]), last = splat(0.0);
                 normal_zonal[0] += setup.zh_scale[0] * band[0] * before;
                 if (order > 1) {
-                    last = setup.first[0] * zn * before;
+                    last = setup.legendre.first[0] * zn * before;
                     normal_zonal[1] += setup.zh_scale[1] * band[1] * last;
                 }
                 for (int l = 2; l < order; ++l) {
                     const int i = sh_index(l, 0);
-                    const VecD next = setup.a[i] * (zn * last - setup.b[i] * before);
+                    const VecD next = setup.legendre.a[i] * (zn * last - setup.legendre.b[i] * before);
                     normal_zonal[l] += setup.zh_scale[l] * band[l] * next;
                     before = last;
                     last = next;
@@ -366,31 +366,6 @@ RangeFunction<Real> range_function(int order) {
         case 8: return &shade_range<Real, 8>;
         default: return &shade_range<Real, 0>;
     }
-}
-
-// The Legendre recurrence coefficients, in double.
-struct LegendreCoefficients {
-    std::array<double, max_order> diagonal{}, first{};
-    std::array<double, max_order * max_order> a{}, b{};
-
-    LegendreCoefficients() {
-        double product = 1.0;
-        for (int m = 0; m < max_order; ++m) {
-            if (m > 0) product *= std::sqrt((2.0 * m - 1.0) / (2.0 * m));
-            diagonal[m] = std::sqrt((2.0 * m + 1.0) / (4.0 * std::numbers::pi)) * product;
-            first[m] = std::sqrt(2.0 * m + 3.0);
-            for (int l = m + 2; l < max_order; ++l) {
-                const double l2 = double(l) * l, m2 = double(m) * m, lm1 = l - 1.0;
-                a[sh_index(l, m)] = std::sqrt((4.0 * l2 - 1.0) / (l2 - m2));
-                b[sh_index(l, m)] = std::sqrt((lm1 * lm1 - m2) / (4.0 * lm1 * lm1 - 1.0));
-            }
-        }
-    }
-};
-
-const LegendreCoefficients& legendre() {
-    static const LegendreCoefficients table;
-    return table;
 }
 
 }  // namespace
@@ -491,15 +466,7 @@ PoseShadingSetup PoseShader::make_setup(const ZonalOperator& op, const Eigen::Ma
         setup.xt_columns.push_back(e.column);
         setup.xt_values.push_back(e.value);
     }
-    const LegendreCoefficients& t = legendre();
-    for (int i = 0; i < max_order; ++i) {
-        setup.diagonal[i] = t.diagonal[i];
-        setup.first[i] = t.first[i];
-    }
-    for (int i = 0; i < max_order * max_order; ++i) {
-        setup.a[i] = t.a[i];
-        setup.b[i] = t.b[i];
-    }
+    setup.legendre = legendre_recurrence();
     setup.lighting.resize(coefficients);
     setup.back.resize(coefficients);
     for (int l = 0; l < order_; ++l) {

@@ -8,6 +8,7 @@
 #include "common/error.hpp"
 #include "common/latlong.hpp"
 #include "sh/basis.hpp"
+#include "sh/legendre.hpp"
 
 namespace penumbra::sh {
 namespace {
@@ -123,7 +124,7 @@ EnvironmentProjection project_equirectangular(int order, const float* pixels, in
         for (int k = 0; k < nodes; ++k) {
             const double theta = theta_top + half * (1.0 + xi[k]);
             const double s = std::sin(theta);
-            detail::legendre_scaled(order, std::cos(theta), p.data());
+            legendre_scaled(order, std::cos(theta), p.data());
             double s_power = half * xi_weight[k] * s;  // weight · sin^(m+1)θ
             for (int m = 0; m < order; ++m) {
                 for (int l = m; l < order; ++l) row_factor[sh_index(l, m)] += s_power * p[sh_index(l, m)];

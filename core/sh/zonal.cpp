@@ -4,6 +4,7 @@
 #include <numbers>
 #include <vector>
 
+#include "sh/legendre.hpp"
 #include "sh/point_sets.hpp"
 
 namespace penumbra::sh {
@@ -38,7 +39,7 @@ std::array<double, max_order> project_zonal(int order, const std::function<doubl
     double p[max_order * max_order];
     for (int k = 0; k < quadrature_nodes; ++k) {
         const double value = f(mu[k]);
-        detail::legendre_scaled(order, mu[k], p);  // p̄_l0 = y_l0
+        legendre_scaled(order, mu[k], p);  // p̄_l0 = y_l0
         for (int l = 0; l < order; ++l) band[l] += 2.0 * std::numbers::pi * w[k] * value * p[sh_index(l, 0)];
     }
     return band;
