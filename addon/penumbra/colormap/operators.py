@@ -108,7 +108,9 @@ def _ramp_fingerprint(node):
     noise_settings = None
     if noise is not None:
         def linked(socket):
-            return (socket.links[0].from_node.name, socket.links[0].from_socket.identifier) if socket.is_linked else None
+            if not socket.is_linked:
+                return None
+            return socket.links[0].from_node.name, socket.links[0].from_socket.identifier
         noise_settings = (noise.name, noise.noise_dimensions, getattr(noise, "noise_type", None),
                           getattr(noise, "normalize", None),
                           tuple((i.identifier, linked(i), getattr(i, "default_value", None) if not i.is_linked and
