@@ -40,29 +40,21 @@ void band_vectors(int order, const Eigen::Vector3d& axis, double* u) {
     }
 }
 
-// Solves the small SPD system a·x = b (n <= 4) by Cholesky; a is n×n row-major.
-void solve_spd(int n, double* a, double* b) {
-    for (int j = 0; j < n; ++j) {
-        double d = a[j * n + j];
-        for (int k = 0; k < j; ++k) d -= a[j * n + k] * a[j * n + k];
-        d = std::sqrt(std::max(d, 1e-300));
-        a[j * n + j] = d;
-        for (int i = j + 1; i < n; ++i) {
-            double s = a[i * n + j];
-            for (int k = 0; k < j; ++k) s -= a[i * n + k] * a[j * n + k];
-            a[i * n + j] = s / d;
-        }
-    }
-    for (int i = 0; i < n; ++i) {
-        double s = b[i];
-        for (int k = 0; k < i; ++k) s -= a[i * n + k] * b[k];
-        b[i] = s / a[i * n + i];
-    }
-    for (int i = n - 1; i >= 0; --i) {
-        double s = b[i];
-        for (int k = i + 1; k < n; ++k) s -= a[k * n + i] * b[k];
-        b[i] = s / a[i * n + i];
-    }
+using LobeMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, max_lobes, max_lobes>;
+using LobeVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, max_lobes, 1>;
+
+// One band's lobe coefficients: solves a·x = b with a the lobes' Gram matrix
+// plus the 1e-6 ridge, positive definite by construction, by Cholesky (LLT).
+// Like the hand-written Cholesky this replaces, it never stops the fit: that
+// one clamped a pivot <= 0 to 1e-150 and went on; should LLT meet such a
+// pivot (only a broken input can make one), LDLT, which accepts
+// semi-definite matrices, gives the solution with 0 along the null
+// directions (what the clamp gave for a consistent system, without its
+// 1e300-sized answers for an inconsistent one). NaN in, NaN out, as before.
+LobeVector solve_band(const LobeMatrix& a, const LobeVector& b) {
+    const Eigen::LLT<LobeMatrix> cholesky(a);
+    if (cholesky.info() == Eigen::Success) return cholesky.solve(b);
+    return a.ldlt().solve(b);
 }
 
 struct Problem {
@@ -82,25 +74,25 @@ struct Problem {
         const int n = n_sh();
         for (int i = 0; i < n; ++i) residual[i] = -sh[i];
         for (int l = 0; l < order; ++l) {
-            std::array<double, max_lobes * max_lobes> a{};
-            std::array<double, max_lobes> b{};
+            LobeMatrix a(lobes, lobes);
+            LobeVector b(lobes);
             for (int x = 0; x < lobes; ++x) {
                 for (int y = 0; y <= x; ++y) {
                     double s = 0.0;
                     for (int m = -l; m <= l; ++m)
                         s += u[x * max_sh + sh::sh_index(l, m)] * u[y * max_sh + sh::sh_index(l, m)];
-                    a[x * lobes + y] = a[y * lobes + x] = s;
+                    a(x, y) = a(y, x) = s;
                 }
-                a[x * lobes + x] += 1e-6;
+                a(x, x) += 1e-6;
                 double s = 0.0;
                 for (int m = -l; m <= l; ++m) s += u[x * max_sh + sh::sh_index(l, m)] * sh[sh::sh_index(l, m)];
                 b[x] = s;
             }
-            solve_spd(lobes, a.data(), b.data());
+            const LobeVector g = solve_band(a, b);
             for (int x = 0; x < lobes; ++x) {
-                bands[x * order + l] = b[x];
+                bands[x * order + l] = g[x];
                 for (int m = -l; m <= l; ++m)
-                    residual[sh::sh_index(l, m)] += b[x] * u[x * max_sh + sh::sh_index(l, m)];
+                    residual[sh::sh_index(l, m)] += g[x] * u[x * max_sh + sh::sh_index(l, m)];
             }
         }
         if (anchor)
