@@ -19,6 +19,7 @@ DEBIAN_PACKAGES=(
   xvfb xauth              # a display for Blender's GPU and EEVEE work in tests and the demo
   python3-venv            # the virtual environments below
   python3-pytest python3-numpy  # pytest and numpy inside Debian's Blender (it runs the system Python)
+  assimp-testmodels       # CMU motion capture (BVH) that drives scripts/visibility_humanoid.py, the realistic test character
 )
 missing=()
 for pkg in "${DEBIAN_PACKAGES[@]}"; do
