@@ -117,7 +117,9 @@ Eigen::Vector3d EnvironmentMap::direction(int row, int column) const {
     return latlong::pixel_direction(row, column, height, width, theta_max());
 }
 
-EnvironmentMap make_environment(const Image& radiance, const MapOptions& options, const Progress& progress) {
+namespace {
+
+void check_map_input(const Image& radiance, const MapOptions& options) {
     if (radiance.empty() || radiance.pixels.size() != radiance.pixel_count() * std::size_t(radiance.channels))
         throw ArgumentError("the environment image is empty (" + std::to_string(radiance.width) + "x" +
                             std::to_string(radiance.height) + "); give an image with pixels");
@@ -128,105 +130,134 @@ EnvironmentMap make_environment(const Image& radiance, const MapOptions& options
     if (options.supersampling < 1 || options.supersampling > 16)
         throw ArgumentError("supersampling must be between 1 and 16, got " + std::to_string(options.supersampling));
     if (options.projection == Projection::fisheye) options.lens.check();
+}
 
-    Image in = to_rgb(radiance);
-    EnvironmentMap map;
-    map.defects = sanitize(in, true);
-
-    // The input's own integral, with its own pixel Jacobian.
-    {
-        const auto& Y = rec709_luminance;
-        double sum = 0.0;
-        const bool latlong = options.projection == Projection::equirectangular ||
-                             options.projection == Projection::hemisphere_polar;
-        for (int r = 0; r < in.height; ++r) {
-            if (latlong) {
-                sum += latlong_row_luminance(options.projection, in.width, in.height, r, in.row(r));
-                continue;
-            }
-            double row_sum = 0.0;
-            const double row_omega = latlong ? pixel_solid_angle(options.projection, options.lens, in.width,
-                                                                 in.height, 0, r) : 0.0;
-            for (int c = 0; c < in.width; ++c) {
-                const double omega = latlong ? row_omega
-                                             : pixel_solid_angle(options.projection, options.lens, in.width,
-                                                                 in.height, c, r);
-                if (omega == 0.0) continue;
-                row_sum += omega * (Y[0] * in.at(c, r, 0) + Y[1] * in.at(c, r, 1) + Y[2] * in.at(c, r, 2));
-            }
-            sum += row_sum;
+// Σ Y·Ω over the input's pixels, each with its own projection's solid angle.
+double input_integral_luminance(const Image& in, const MapOptions& options) {
+    const auto& Y = rec709_luminance;
+    double sum = 0.0;
+    for (int r = 0; r < in.height; ++r) {
+        if (is_latlong(options.projection)) {
+            sum += latlong_row_luminance(options.projection, in.width, in.height, r, in.row(r));
+            continue;
         }
-        map.source_integral_luminance = sum;
+        double row_sum = 0.0;
+        for (int c = 0; c < in.width; ++c) {
+            const double omega = pixel_solid_angle(options.projection, options.lens, in.width, in.height, c, r);
+            if (omega == 0.0) continue;
+            row_sum += omega * (Y[0] * in.at(c, r, 0) + Y[1] * in.at(c, r, 1) + Y[2] * in.at(c, r, 2));
+        }
+        sum += row_sum;
     }
+    return sum;
+}
 
+// Equirectangular and polar input: the grid itself, or averaged down to
+// max_width columns (energy-exact), 64 output rows per progress report.
+void reduce_latlong(Image& in, const MapOptions& options, const Progress& progress, EnvironmentMap& map) {
     const int limit = options.max_width;
-    if (options.projection == Projection::equirectangular || options.projection == Projection::hemisphere_polar) {
-        map.full_sphere = options.projection == Projection::equirectangular;
-        if (limit == 0 || in.width <= limit) {
-            map.width = in.width;
-            map.height = in.height;
-            map.rgb = std::move(in.pixels);
-            return map;
-        }
-        map.width = limit;
-        map.height = std::max(1, int(std::lround(double(in.height) * limit / in.width)));
-        map.rgb.assign(std::size_t(map.width) * map.height * 3, 0.0f);
-        const LatLongSpans spans(in.width, in.height, map.width, map.height, map.theta_max());
-        for (int R0 = 0; R0 < map.height; R0 += 64) {
-            progress.report(double(R0) / map.height);
-            reduce_latlong_rows(spans, in.pixels.data(), 0, in.width, R0, std::min(map.height, R0 + 64), map,
-                                options.threads);
-        }
-        return map;
+    map.full_sphere = options.projection == Projection::equirectangular;
+    if (limit == 0 || in.width <= limit) {
+        map.width = in.width;
+        map.height = in.height;
+        map.rgb = std::move(in.pixels);
+        return;
     }
+    map.width = limit;
+    map.height = std::max(1, int(std::lround(double(in.height) * limit / in.width)));
+    map.rgb.assign(std::size_t(map.width) * map.height * 3, 0.0f);
+    const LatLongSpans spans(in.width, in.height, map.width, map.height, map.theta_max());
+    for (int R0 = 0; R0 < map.height; R0 += 64) {
+        progress.report(double(R0) / map.height);
+        reduce_latlong_rows(spans, in.pixels.data(), 0, in.width, R0, std::min(map.height, R0 + 64), map,
+                            options.threads);
+    }
+}
 
-    // Fisheye and mirror ball: resample to a latitude–longitude grid.
+// The grid a fisheye (hemisphere, 4H × H, H ≈ the image-circle radius) or
+// mirror ball (sphere, 2H × H, H ≈ πR/2) is resampled to, and the look-ups
+// per cell side; a grid wider than max_width is narrowed and supersampled
+// more instead.
+struct ResampleGrid {
+    int width, height, supersampling;
+};
+
+ResampleGrid resample_grid(const Image& in, const MapOptions& options, bool full_sphere) {
     const double radius = 0.5 * std::min(in.width, in.height);
-    map.full_sphere = options.projection == Projection::mirror_ball;
-    int h = map.full_sphere ? int(std::ceil(0.5 * pi * radius)) : int(std::ceil(radius));
+    const int aspect = full_sphere ? 2 : 4;
+    int h = full_sphere ? int(std::ceil(0.5 * pi * radius)) : int(std::ceil(radius));
     h = std::max(h, 4);
-    int w = (map.full_sphere ? 2 : 4) * h;
+    int w = aspect * h;
     int ss = options.supersampling;
+    const int limit = options.max_width;
     if (limit > 0 && w > limit) {
         ss = std::min(16, int(std::ceil(double(ss) * w / limit)));
-        h = std::max(1, limit / (map.full_sphere ? 2 : 4));
-        w = (map.full_sphere ? 2 : 4) * h;
+        h = std::max(1, limit / aspect);
+        w = aspect * h;
     }
+    return {w, h, ss};
+}
+
+// Mean of ss² bilinear look-ups spread evenly over the solid angle of output
+// cell (r, c); look-ups outside the image circle count as black.
+void resample_cell(const Image& in, const MapOptions& options, const EnvironmentMap& map, int ss, int r, int c,
+                   float* dst) {
+    const double t0 = latlong::theta_of_y(r, map.height, map.theta_max());
+    const double t1 = latlong::theta_of_y(r + 1, map.height, map.theta_max());
+    double acc[3] = {0, 0, 0}, wsum = 0.0;
+    for (int j = 0; j < ss; ++j) {
+        // Sub-rows equally spaced in cos θ, so each look-up stands for the
+        // same solid angle.
+        const double z = std::cos(t0) + (std::cos(t1) - std::cos(t0)) * (j + 0.5) / ss;
+        const double theta = std::acos(std::clamp(z, -1.0, 1.0));
+        for (int i = 0; i < ss; ++i) {
+            const double phi = latlong::phi_of_x(c + (i + 0.5) / ss, map.width);
+            const Eigen::Vector3d d = latlong::direction_of_angles(theta, phi);
+            double x, y;
+            if (!direction_to_image(options.projection, options.lens, in.width, in.height, d, x, y)) continue;
+            double v[3];
+            bilinear(in, x, y, v);
+            for (int ch = 0; ch < 3; ++ch) acc[ch] += v[ch];
+            wsum += 1.0;
+        }
+    }
+    for (int ch = 0; ch < 3; ++ch) dst[ch] = wsum > 0 ? float(acc[ch] / (ss * ss)) : 0.0f;
+}
+
+// Fisheye and mirror ball: resampled to a latitude–longitude grid, in bands
+// of 64 rows (one progress report each).
+void resample_to_latlong(const Image& in, const MapOptions& options, const Progress& progress,
+                         EnvironmentMap& map) {
+    map.full_sphere = options.projection == Projection::mirror_ball;
+    const ResampleGrid grid = resample_grid(in, options, map.full_sphere);
+    const int w = grid.width, h = grid.height;
     map.width = w;
     map.height = h;
     map.rgb.assign(std::size_t(w) * h * 3, 0.0f);
-    const double theta_max = map.theta_max();
     for (int R0 = 0; R0 < h; R0 += 64) {
         progress.report(double(R0) / h);
         parallel_for(std::size_t(std::min(64, h - R0)), {options.threads, 1, "lights.map_resample"},
                      [&](std::size_t b, std::size_t e) {
-            for (int r = R0 + int(b); r < R0 + int(e); ++r) {
-                const double t0 = latlong::theta_of_y(r, h, theta_max), t1 = latlong::theta_of_y(r + 1, h, theta_max);
-                for (int c = 0; c < w; ++c) {
-                    double acc[3] = {0, 0, 0}, wsum = 0.0;
-                    for (int j = 0; j < ss; ++j) {
-                        // Sub-rows equally spaced in cos θ, so each look-up
-                        // stands for the same solid angle.
-                        const double z = std::cos(t0) + (std::cos(t1) - std::cos(t0)) * (j + 0.5) / ss;
-                        const double theta = std::acos(std::clamp(z, -1.0, 1.0));
-                        for (int i = 0; i < ss; ++i) {
-                            const Eigen::Vector3d d =
-                                latlong::direction_of_angles(theta, latlong::phi_of_x(c + (i + 0.5) / ss, w));
-                            double x, y;
-                            if (!direction_to_image(options.projection, options.lens, in.width, in.height, d, x, y))
-                                continue;
-                            double v[3];
-                            bilinear(in, x, y, v);
-                            for (int ch = 0; ch < 3; ++ch) acc[ch] += v[ch];
-                            wsum += 1.0;
-                        }
-                    }
-                    float* dst = map.rgb.data() + (std::size_t(r) * w + c) * 3;
-                    for (int ch = 0; ch < 3; ++ch) dst[ch] = wsum > 0 ? float(acc[ch] / (ss * ss)) : 0.0f;
-                }
-            }
+            for (int r = R0 + int(b); r < R0 + int(e); ++r)
+                for (int c = 0; c < w; ++c)
+                    resample_cell(in, options, map, grid.supersampling, r, c,
+                                  map.rgb.data() + (std::size_t(r) * w + c) * 3);
         });
     }
+}
+
+}  // namespace
+
+EnvironmentMap make_environment(const Image& radiance, const MapOptions& options, const Progress& progress) {
+    check_map_input(radiance, options);
+    Image in = to_rgb(radiance);
+    EnvironmentMap map;
+    map.defects = sanitize(in, true);
+    map.source_integral_luminance = input_integral_luminance(in, options);
+    if (is_latlong(options.projection))
+        reduce_latlong(in, options, progress, map);
+    else
+        resample_to_latlong(in, options, progress, map);
     return map;
 }
 

@@ -36,8 +36,9 @@ PowerMode parse_power_mode(const char* name) {
     throw ArgumentError("unknown power mode '" + std::string(name ? name : "") + "'; use 'EQUAL' or 'REGION'");
 }
 
-FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistribution& dist, const Sampler& sampler,
-                           const LightOptions& options) {
+namespace {
+
+void check_light_count(const EnvironmentMap& map, const LightOptions& options) {
     const std::size_t cells = std::size_t(map.width) * map.height;
     if (options.count < 1)
         throw ArgumentError("the light count must be at least 1, got " + std::to_string(options.count));
@@ -45,10 +46,11 @@ FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistributio
         throw ArgumentError("the light count " + std::to_string(options.count) + " exceeds the " +
                             std::to_string(cells) + " pixels of the working map (" + std::to_string(map.width) +
                             "x" + std::to_string(map.height) + "); use at most that many lights");
+}
 
-    FrameLights out;
-    out.total_rgb = integral_rgb(map);
-    out.total_power = luma(options.luminance, out.total_rgb);
+// Light k at the sampler's image of point k (Cranley–Patterson shifted);
+// returns the samples (direction and grid cell).
+std::vector<Sample> place_lights(const Sampler& sampler, const LightOptions& options, FrameLights& out) {
     const int n = options.count;
     auto points = sample_points(n, options.blue_noise);
     if (!options.point_shift.isZero())
@@ -56,51 +58,60 @@ FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistributio
             p = Eigen::Vector2d(p.x() + options.point_shift.x() - std::floor(p.x() + options.point_shift.x()),
                                 p.y() + options.point_shift.y() - std::floor(p.y() + options.point_shift.y()));
     out.lights.resize(n);
-    std::vector<Eigen::Vector3d> sample_dirs(n);
     std::vector<Sample> samples(n);
     for (int k = 0; k < n; ++k) {
         samples[k] = sampler.sample(points[k].x(), points[k].y());
-        sample_dirs[k] = samples[k].direction;
         out.lights[k].index = k;
         out.lights[k].sample_direction = samples[k].direction;
         out.lights[k].direction = samples[k].direction;
     }
+    return samples;
+}
 
-    if (options.power == PowerMode::equal) {
-        // The paper's equal split; colour from the cell the sample fell in.
-        const double share = out.total_power / n;
-        for (int k = 0; k < n; ++k) {
-            const float* p = map.pixel(samples[k].row, samples[k].column);
-            Eigen::Vector3d chroma(p[0], p[1], p[2]);
-            const double y = luma(options.luminance, chroma);
-            chroma = y > 0.0 ? Eigen::Vector3d(chroma / y) : Eigen::Vector3d::Ones();
-            Light& l = out.lights[k];
-            l.rgb = share * chroma;
-            l.power = share;
-            // A light covers about 1/(N p(ω)) steradians: RMS radius of that disc.
-            const double w = dist.weight[std::size_t(samples[k].row) * map.width + samples[k].column];
-            const double omega_cell = map.solid_angle(samples[k].row);
-            const double density = dist.total > 0.0 && omega_cell > 0.0 ? w / (omega_cell * dist.total) : 0.0;
-            const double cover = density > 0.0 ? 1.0 / (n * density) : 4.0 * pi / n;
-            l.spread = std::min(pi / 4, std::sqrt(std::min(cover, 2 * pi) / pi) / std::sqrt(2.0));
-        }
-        return out;
+// The paper's equal split; colour from the cell the sample fell in.
+void equal_power(const EnvironmentMap& map, const LuminanceDistribution& dist, const std::vector<Sample>& samples,
+                 const LightOptions& options, FrameLights& out) {
+    const int n = options.count;
+    const double share = out.total_power / n;
+    for (int k = 0; k < n; ++k) {
+        const float* p = map.pixel(samples[k].row, samples[k].column);
+        Eigen::Vector3d chroma(p[0], p[1], p[2]);
+        const double y = luma(options.luminance, chroma);
+        chroma = y > 0.0 ? Eigen::Vector3d(chroma / y) : Eigen::Vector3d::Ones();
+        Light& l = out.lights[k];
+        l.rgb = share * chroma;
+        l.power = share;
+        // A light covers about 1/(N p(ω)) steradians: RMS radius of that disc.
+        const double w = dist.weight[std::size_t(samples[k].row) * map.width + samples[k].column];
+        const double omega_cell = map.solid_angle(samples[k].row);
+        const double density = dist.total > 0.0 && omega_cell > 0.0 ? w / (omega_cell * dist.total) : 0.0;
+        const double cover = density > 0.0 ? 1.0 / (n * density) : 4.0 * pi / n;
+        l.spread = std::min(pi / 4, std::sqrt(std::min(cover, 2 * pi) / pi) / std::sqrt(2.0));
     }
+}
 
-    // Region mode: every cell goes to its nearest sample.
+// What region mode gathers per light: Σ L Ω (RGB), the luminance-weighted
+// direction moment and Σ Y·Ω, and the light each cell went to (−1: black).
+struct Regions {
+    std::vector<Eigen::Vector3d> rgb, moment;
+    std::vector<double> y;
+    std::vector<int> owner;
+};
+
+// Every lit cell goes to its nearest sample. One partial sum per block of
+// rows, added in block order: the same result on any number of threads.
+Regions gather_regions(const EnvironmentMap& map, const LuminanceDistribution& dist,
+                       const std::vector<Sample>& samples, const ParallelOptions& rows) {
+    const int n = int(samples.size());
+    std::vector<Eigen::Vector3d> sample_dirs(n);
+    for (int k = 0; k < n; ++k) sample_dirs[k] = samples[k].direction;
     const DirectionIndex index(sample_dirs);
-    // One partial sum per block of rows, added in block order: the same
-    // result on any number of threads.
-    const ParallelOptions rows{options.threads, std::max<std::size_t>(1, (std::size_t(map.height) + 63) / 64),
-                               "lights.region_powers"};
-    struct Accum {
-        std::vector<Eigen::Vector3d> rgb, moment;
-        std::vector<double> y;
-    };
-    std::vector<Accum> acc(block_count(std::size_t(map.height), rows.block));
-    std::vector<int> owner(cells, -1);
+    std::vector<Regions> acc(block_count(std::size_t(map.height), rows.block));
+    Regions total{std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero()),
+                  std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero()), std::vector<double>(n, 0.0),
+                  std::vector<int>(std::size_t(map.width) * map.height, -1)};
     parallel_blocks(std::size_t(map.height), rows, [&](std::size_t block, std::size_t b, std::size_t e) {
-        Accum& a = acc[block];
+        Regions& a = acc[block];
         a.rgb.assign(n, Eigen::Vector3d::Zero());
         a.moment.assign(n, Eigen::Vector3d::Zero());
         a.y.assign(n, 0.0);
@@ -112,32 +123,30 @@ FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistributio
                 if (p[0] <= 0.0f && p[1] <= 0.0f && p[2] <= 0.0f) continue;
                 const Eigen::Vector3d w = map.direction(r, c);
                 const int k = index.nearest(w);
-                owner[cell] = k;
+                total.owner[cell] = k;
                 a.rgb[k] += omega * Eigen::Vector3d(p[0], p[1], p[2]);
                 a.moment[k] += dist.weight[cell] * w;
                 a.y[k] += dist.weight[cell];
             }
         }
     });
-    std::vector<Eigen::Vector3d> rgb(n, Eigen::Vector3d::Zero()), moment(n, Eigen::Vector3d::Zero());
-    std::vector<double> ysum(n, 0.0);
-    for (const Accum& a : acc) {
+    for (const Regions& a : acc) {
         if (a.rgb.empty()) continue;
         for (int k = 0; k < n; ++k) {
-            rgb[k] += a.rgb[k];
-            moment[k] += a.moment[k];
-            ysum[k] += a.y[k];
+            total.rgb[k] += a.rgb[k];
+            total.moment[k] += a.moment[k];
+            total.y[k] += a.y[k];
         }
     }
-    for (int k = 0; k < n; ++k) {
-        Light& l = out.lights[k];
-        l.rgb = rgb[k];
-        l.power = luma(options.luminance, rgb[k]);
-        const double m = moment[k].norm();
-        if (m > 1e-300 && ysum[k] > 0.0) l.direction = moment[k] / m;
-    }
-    // Spread: RMS angle of each region about its centroid.
-    std::vector<std::vector<double>> partial(acc.size());
+    return total;
+}
+
+// Spread: RMS angle of each region about its light's direction, summed per
+// block of rows as above.
+void region_spread(const EnvironmentMap& map, const LuminanceDistribution& dist, const Regions& regions,
+                   const ParallelOptions& rows, FrameLights& out) {
+    const int n = int(out.lights.size());
+    std::vector<std::vector<double>> partial(block_count(std::size_t(map.height), rows.block));
     ParallelOptions spread_rows = rows;
     spread_rows.stage = "lights.region_spread";
     parallel_blocks(std::size_t(map.height), spread_rows, [&](std::size_t block, std::size_t b, std::size_t e) {
@@ -146,7 +155,7 @@ FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistributio
         for (int r = int(b); r < int(e); ++r)
             for (int c = 0; c < map.width; ++c) {
                 const std::size_t cell = std::size_t(r) * map.width + c;
-                const int k = owner[cell];
+                const int k = regions.owner[cell];
                 if (k < 0 || dist.weight[cell] <= 0.0) continue;
                 const double a = angle_between(map.direction(r, c), out.lights[k].direction);
                 part[k] += dist.weight[cell] * a * a;
@@ -156,7 +165,39 @@ FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistributio
     for (const auto& part : partial)
         for (std::size_t k = 0; k < part.size(); ++k) second[k] += part[k];
     for (int k = 0; k < n; ++k)
-        out.lights[k].spread = ysum[k] > 0.0 ? std::sqrt(second[k] / ysum[k]) : 0.0;
+        out.lights[k].spread = regions.y[k] > 0.0 ? std::sqrt(second[k] / regions.y[k]) : 0.0;
+}
+
+// Region mode: each light carries the power of the cells nearest to it and
+// points at their luminance-weighted centroid.
+void region_power(const EnvironmentMap& map, const LuminanceDistribution& dist, const std::vector<Sample>& samples,
+                  const LightOptions& options, FrameLights& out) {
+    const ParallelOptions rows{options.threads, std::max<std::size_t>(1, (std::size_t(map.height) + 63) / 64),
+                               "lights.region_powers"};
+    const Regions regions = gather_regions(map, dist, samples, rows);
+    for (std::size_t k = 0; k < out.lights.size(); ++k) {
+        Light& l = out.lights[k];
+        l.rgb = regions.rgb[k];
+        l.power = luma(options.luminance, regions.rgb[k]);
+        const double m = regions.moment[k].norm();
+        if (m > 1e-300 && regions.y[k] > 0.0) l.direction = regions.moment[k] / m;
+    }
+    region_spread(map, dist, regions, rows, out);
+}
+
+}  // namespace
+
+FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistribution& dist, const Sampler& sampler,
+                           const LightOptions& options) {
+    check_light_count(map, options);
+    FrameLights out;
+    out.total_rgb = integral_rgb(map);
+    out.total_power = luma(options.luminance, out.total_rgb);
+    const std::vector<Sample> samples = place_lights(sampler, options, out);
+    if (options.power == PowerMode::equal)
+        equal_power(map, dist, samples, options, out);
+    else
+        region_power(map, dist, samples, options, out);
     return out;
 }
 

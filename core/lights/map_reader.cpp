@@ -13,10 +13,7 @@
 
 namespace penumbra::lights {
 
-
 namespace {
-
-bool is_latlong(Projection p) { return p == Projection::equirectangular || p == Projection::hemisphere_polar; }
 
 // The channels that become R, G, B, chosen as core/image's read_image does:
 // grey (1–2 channels) → channel 0 three times; else the channels named R,

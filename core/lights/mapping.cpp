@@ -92,6 +92,10 @@ bool covers_full_sphere(Projection projection) {
     return projection == Projection::equirectangular || projection == Projection::mirror_ball;
 }
 
+bool is_latlong(Projection projection) {
+    return projection == Projection::equirectangular || projection == Projection::hemisphere_polar;
+}
+
 bool image_to_direction(Projection projection, const FisheyeLens& lens, int width, int height, double x, double y,
                         Eigen::Vector3d& direction) {
     switch (projection) {

@@ -62,6 +62,10 @@ struct FisheyeLens {
 // Whether a projection covers the full sphere (else the upper hemisphere).
 bool covers_full_sphere(Projection projection);
 
+// Whether a projection is a latitude–longitude grid (equirectangular or
+// hemisphere_polar), which the working grid keeps as it is.
+bool is_latlong(Projection projection);
+
 // Direction of continuous pixel position (x, y) of a width×height image, or
 // false if it lies outside the image circle (fisheye, mirror ball). The
 // direction is a unit vector.
