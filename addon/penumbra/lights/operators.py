@@ -233,8 +233,7 @@ class PENUMBRA_OT_build_light_rig(bpy.types.Operator):
                 setattr(self, name, getattr(s, name))
 
     def _start(self, context):
-        if self.count < 1:
-            raise ValueError("the light count must be at least 1")
+        # The count's lower bound is the property's (the core's range).
         if self.frame_end < self.frame_start:
             raise ValueError(f"frame_end ({self.frame_end}) is before frame_start ({self.frame_start})")
         return _Job(self, context)
