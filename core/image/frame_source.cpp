@@ -1,6 +1,7 @@
 #include "image/frame_source.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <filesystem>
 #include <regex>
 
@@ -25,9 +26,13 @@ bool split_frame_number(const std::string& filename, NamePattern& out) {
     std::smatch m;
     if (!std::regex_match(filename, m, re))
         return false;
+    // A run of digits too large for an int (a date, an ID) is no frame number.
+    const std::string digits = m[2];
+    const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), out.number);
+    if (error != std::errc() || end != digits.data() + digits.size())
+        return false;
     out.prefix = m[1];
-    out.digits = static_cast<int>(m[2].length());
-    out.number = std::stoi(m[2]);
+    out.digits = static_cast<int>(digits.size());
     out.suffix = m[3];
     return true;
 }
