@@ -68,7 +68,7 @@ public:
     template <typename T> std::vector<T> get_array(std::uint64_t count, const char* what) {
         if (count > (size_ - at_) / sizeof(T)) fail(std::string("it ends inside ") + what);
         std::vector<T> out(count);
-        std::memcpy(out.data(), data_ + at_, count * sizeof(T));
+        if (count) std::memcpy(out.data(), data_ + at_, count * sizeof(T));  // never memcpy from/to null
         at_ += count * sizeof(T);
         return out;
     }
