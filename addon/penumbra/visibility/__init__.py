@@ -5,11 +5,9 @@ Operators (names are a contract): penumbra.bake_visibility,
 penumbra.apply_visibility, penumbra.setup_material. Per-object settings:
 `object.penumbra_visibility`; scene settings: `scene.penumbra.visibility`."""
 
-import json
-
 import bpy
 
-from . import settings, bake, runtime, material
+from . import settings, bake, runtime, material, report
 
 # Registered before the scene's `penumbra` group, which points at SceneSettings.
 settings_classes = settings.classes
@@ -60,23 +58,12 @@ def draw_panel(layout, context):
         alert.alert = True
         alert.label(text=s.status, icon="ERROR")
 
-    if s.report:
-        try:
-            summary = json.loads(s.report)
-        except ValueError:
-            summary = None
-        if summary:
-            box = layout.box()
-            box.label(text="Last bake", icon="INFO")
-            box.label(text=f"{summary['frames']} frames, {summary['rays']} rays, {summary['lobes']} lobes")
-            box.label(text=f"Active joints: {', '.join(summary['active_joints']) or 'none'}")
-            box.label(text=f"ZH fit error (RMS): {summary['zh_fit']['sh_rms']:.4f}")
-            if summary.get("holdout_frames"):
-                box.label(text=f"Held-out AO error (saved model): {summary['model_holdout']['ao_mean_abs']:.4f}")
-            else:
-                box.label(text="No held-out frames (bake 8 or more)")
-            box.label(text=f"Model {summary['model_bytes'] / 1e6:.2f} MB (dense {summary['dense_bytes'] / 1e6:.2f} MB)")
-            box.label(text=f"Bake {summary['seconds_bake']:.1f} s, fit {summary['seconds_fit']:.1f} s")
+    lines = report.summary_lines(s.report)
+    if lines:
+        box = layout.box()
+        box.label(text="Last bake", icon="INFO")
+        for line in lines:
+            box.label(text=line)
 
 
 def register():
