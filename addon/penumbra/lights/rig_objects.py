@@ -26,6 +26,8 @@ import bpy
 import mathutils
 import numpy as np
 
+from . import rig_index
+
 INDEX_KEY = "penumbra_light_index"
 ROOT_KEY = "penumbra_light_rig_root"
 COLLECTION_NAME = "Penumbra Light Rig"
@@ -249,8 +251,8 @@ def write_rig(scene, settings, rig, frame_start, limit_shadows):
         existing, extra = {}, []
         for ob in coll.objects:
             if INDEX_KEY in ob:
-                k = int(ob[INDEX_KEY])
-                if k >= values.slots or k in existing or ob.type != "LIGHT":
+                k = rig_index.light_index(ob[INDEX_KEY])
+                if k is None or k >= values.slots or k in existing or ob.type != "LIGHT":
                     extra.append(ob)
                 else:
                     existing[k] = ob
