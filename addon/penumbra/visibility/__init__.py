@@ -7,7 +7,7 @@ penumbra.apply_visibility, penumbra.setup_material. Per-object settings:
 
 import bpy
 
-from . import settings, bake, runtime, material, report
+from . import settings, bake, runtime, material, report, gpu_preview
 
 # Registered before the scene's `penumbra` group, which points at SceneSettings.
 settings_classes = settings.classes
@@ -47,6 +47,11 @@ def draw_panel(layout, context):
     row.operator("penumbra.apply_visibility", icon="SHADING_RENDERED")
     row.operator("penumbra.setup_material", icon="MATERIAL")
     box.prop(scene_settings, "live_update")
+    box.prop(scene_settings, "gpu_preview")
+    if scene_settings.gpu_preview and scene_settings.gpu_preview_status:
+        row = box.row()
+        row.alert = True
+        row.label(text=f"GPU preview: {scene_settings.gpu_preview_status}", icon="ERROR")
     box.prop(scene_settings, "threads")
     from .scene_data import read_world
     world = read_world(context.scene)
@@ -71,9 +76,11 @@ def register():
     for cls in _operator_classes:
         bpy.utils.register_class(cls)
     runtime.register_handlers()
+    gpu_preview.register()
 
 
 def unregister():
+    gpu_preview.unregister()
     runtime.unregister_handlers()
     for cls in reversed(_operator_classes):
         bpy.utils.unregister_class(cls)

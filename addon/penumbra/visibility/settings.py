@@ -10,8 +10,14 @@ from ..core_settings import limits
 
 def _refresh(self, context):
     # Late import: runtime imports this module.
-    from . import runtime
+    from . import runtime, gpu_preview
     runtime.request_refresh()
+    gpu_preview.request_refresh()
+
+
+def _gpu_preview_toggled(self, context):
+    from . import gpu_preview
+    gpu_preview.toggled(context.scene)
 
 
 class VisibilitySceneSettings(bpy.types.PropertyGroup):
@@ -21,6 +27,13 @@ class VisibilitySceneSettings(bpy.types.PropertyGroup):
     live_update: bpy.props.BoolProperty(
         name="Live Update", default=True,
         description="Re-shade enabled objects on frame changes and pose edits", update=_refresh)
+    gpu_preview: bpy.props.BoolProperty(
+        name="GPU Preview", default=False, update=_gpu_preview_toggled,
+        description="Draw the shading of enabled objects in the 3D viewport with a GPU shader that follows the "
+                    "pose (a display mode: the attributes and renders are unchanged)")
+    gpu_preview_status: bpy.props.StringProperty(
+        name="GPU Preview Status", default="",
+        description="Why the GPU preview draws nothing (no GPU, a model it cannot draw), if it does not")
 
 
 class VisibilityObjectSettings(bpy.types.PropertyGroup):

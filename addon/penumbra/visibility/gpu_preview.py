@@ -1,0 +1,441 @@
+"""GPU viewport preview of the visibility shading: paper §4.3 steps 2–5
+(lobes → SH → 1D-BRDF operator → dot with the lighting) in a GLSL vertex
+shader (preview_shader.py), drawn over every enabled object in the 3D
+viewport and following the pose. A display mode only
+(`scene.penumbra.visibility.gpu_preview`): the `penumbra_shading` /
+`penumbra_visibility` attributes, the CPU run time and renders are
+untouched by it.
+
+Per pose, on the CPU (the core, GIL released): step 1, the ZH lobes of the
+pose (`VisibilityPoseModel.synthesize`), and the frames of the deformed
+mesh (`visibility_vertex_frames`, the rule the bake used), from the same
+model, mesh, lighting and BRDF settings as runtime.shade_object. They go to
+the GPU as vertex attributes; the lighting, T and the camera as a uniform
+block. The frame-change and depsgraph handlers compute them (object_inputs);
+the SpaceView3D draw callback uploads what changed and draws. Neither ever
+raises into Blender: problems go to the scene's `gpu_preview_status`.
+
+It matches the CPU shading to float rounding (shade_offscreen reads it back
+from an RGBA32F buffer, one vertex per pixel; tests/blender/test_gpu_preview.py
+compares it under Xvfb and in the bpy 5.x module after gpu.init()).
+
+Limits: SH orders 1–8 and 1–4 lobes (everything a visibility model can
+hold). The viewport colour is the scene-linear shade with the sRGB curve,
+not the scene's view transform. Phong's viewer is the scene camera, as for
+the attributes, not the viewport's eye.
+
+No GPU (the bpy module or `blender -b`): the setting can still be switched
+on; gpu_preview_status then says why nothing is drawn.
+"""
+
+import time
+
+import bpy
+import numpy as np
+from bpy.app.handlers import persistent
+
+from .. import native
+from . import preview_shader, runtime, scene_data
+from .preview_shader import MAX_LOBES, MAX_ORDER, MODELS, check_configuration, lobe_vec4_count  # noqa: F401
+from .scene_data import VisibilityInputError
+
+READBACK_WIDTH = 1024  # pixels per row when shading into an offscreen buffer, one vertex per pixel
+# Pulls the preview's triangles towards the eye by this fraction of clip w, so
+# they win the depth test against Blender's own drawing of the same surface.
+DEPTH_BIAS = 2e-5
+
+
+class PoseInputs:
+    """Everything one draw of one object needs, computed on the CPU: vertex
+    attributes (pack_vertex_data), triangles, the uniform block's bytes and
+    the configuration (order, lobes, model)."""
+
+    def __init__(self, order, lobes, model, attributes, triangles, uniforms):
+        check_configuration(order, lobes, model)
+        self.order, self.lobes, self.model = order, lobes, model
+        self.attributes = attributes
+        self.triangles = triangles
+        self.uniforms = uniforms
+        self.vertex_count = len(attributes["p_position"])
+        self.seconds = {}
+
+
+def inputs_from_arrays(order, lighting, axes, bands, normals, tangents, positions=None, model="diffuse",
+                       phong_exponent=16.0, camera=(0.0, 0.0, 0.0), transmission=(0.5, 0.5, 0.5),
+                       triangles=None):
+    """PoseInputs from the arrays `_penumbra.shade_pose` takes (same meaning)."""
+    axes = np.asarray(axes, dtype=np.float32)
+    bands = np.asarray(bands, dtype=np.float32)
+    if positions is None:
+        positions = np.zeros((len(axes), 3), dtype=np.float32)
+    attributes = preview_shader.pack_vertex_data(positions, normals, tangents, axes, bands)
+    uniforms = preview_shader.uniform_data(order, lighting, model, phong_exponent, camera, transmission)
+    tri = np.zeros((0, 3), dtype=np.int32) if triangles is None else np.asarray(triangles, dtype=np.int32)
+    return PoseInputs(order, axes.shape[1], model, attributes, tri, uniforms)
+
+
+_mesh_buffers = {}  # object name -> scene_data.MeshBuffers (the preview's own: the CPU run time reuses its)
+
+
+def object_inputs(obj, scene, depsgraph=None):
+    """PoseInputs of an enabled object at the scene's current state: the same
+    model, mesh, frames, lighting and BRDF as runtime.shade_object.
+    Raises VisibilityInputError / ValueError / OSError like it."""
+    t0 = time.perf_counter()
+    core = native.require()
+    entry = runtime.loaded_model(obj)
+    model = entry.model
+    settings = obj.penumbra_visibility
+    brdf = settings.brdf.lower()
+    check_configuration(model.order, model.lobes, brdf)
+    armature = scene_data.armature_of(obj)
+    rotations = scene_data.bone_rotations(armature, model.joints)
+    depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
+    buffers = _mesh_buffers.get(obj.name)
+    if buffers is None or buffers.vertex_count != model.vertex_count:
+        buffers = _mesh_buffers[obj.name] = scene_data.MeshBuffers(obj.data)
+    frame = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False, buffers=buffers)
+    if len(frame.positions) != model.vertex_count:
+        raise VisibilityInputError(f"'{obj.name}' has {len(frame.positions)} vertices after its modifiers; "
+                                   f"the model has {model.vertex_count}")
+    t1 = time.perf_counter()
+    threads = scene.penumbra.visibility.threads
+    axes, bands, _ = model.synthesize(rotations, threads)
+    t2 = time.perf_counter()
+    frames, _ = core.visibility_vertex_frames(frame.positions, frame.normals, entry.buffers.triangles,
+                                              entry.neighbours)
+    t3 = time.perf_counter()
+    lighting, _ = scene_data.world_lighting(scene, model.order)
+    camera = np.array(scene.camera.matrix_world.translation) if scene.camera else np.zeros(3)
+    inputs = inputs_from_arrays(model.order, lighting, axes, bands, frames[:, 2], frames[:, 0],
+                                positions=frame.positions, model=brdf, phong_exponent=settings.phong_exponent,
+                                camera=camera, transmission=np.array(settings.transmission[:]),
+                                triangles=entry.buffers.triangles)
+    t4 = time.perf_counter()
+    inputs.seconds = {"read": t1 - t0, "pose_to_lobes": t2 - t1, "frames": t3 - t2, "pack": t4 - t3,
+                      "cpu_total": t4 - t0}
+    return inputs
+
+
+# The GPU side ---------------------------------------------------------------------
+
+def gpu_unavailable_reason():
+    """None when Blender's gpu module can draw here; else why not, in a sentence."""
+    try:
+        import gpu
+    except ImportError as error:
+        return f"no GPU available: the gpu module cannot load ({error})"
+    if bpy.app.background and bpy.app.version < (4, 0, 0):
+        # Blender 3.x has no GPU context in background mode, and its gpu
+        # calls crash there instead of raising: nothing is asked.
+        return "no GPU available: Blender runs in background mode (blender -b)"
+    try:
+        backend = gpu.platform.backend_type_get()
+    except (SystemError, RuntimeError) as error:
+        # 4.x/5.x in background: "GPU functions for drawing are not available
+        # in background mode" (5.x: until gpu.init() is called).
+        return f"no GPU available: {error}"
+    if backend == "NONE":
+        return "no GPU available: Blender has no GPU backend here"
+    return None
+
+
+_shaders = {}  # (order, lobes, model, readback) -> GPUShader
+
+
+def shader_for(order, lobes, model, readback):
+    """The compiled shader of one configuration (cached)."""
+    import gpu
+    key = (order, lobes, model, readback)
+    shader = _shaders.get(key)
+    if shader is not None:
+        return shader
+    info = gpu.types.GPUShaderCreateInfo()
+    info.define("ORDER", str(order))
+    info.define("NC", str(order * order))
+    slot = 0
+    for name in ("p_position", "p_normal", "p_tangent"):
+        info.vertex_in(slot, "VEC3", name)
+        slot += 1
+    for k in range(lobe_vec4_count(order, lobes)):
+        info.vertex_in(slot, "VEC4", f"p_lobe{k}")
+        slot += 1
+    info.typedef_source(preview_shader.uniform_block_source(order))
+    info.uniform_buf(0, "PenumbraShading", "shading")
+    interface = gpu.types.GPUStageInterfaceInfo(f"penumbra_preview_{'readback' if readback else 'view'}")
+    if readback:
+        interface.flat("VEC4", "result")
+        info.push_constant("VEC2", "readback_size")
+        fragment = preview_shader.FRAGMENT_READBACK
+    else:
+        interface.smooth("VEC3", "shade")
+        info.push_constant("MAT4", "ViewProjectionMatrix")
+        info.push_constant("FLOAT", "depth_bias")
+        fragment = preview_shader.FRAGMENT_VIEWPORT
+    info.vertex_out(interface)
+    info.fragment_out(0, "VEC4", "fragColor")
+    info.vertex_source(preview_shader.vertex_source(order, lobes, model, readback))
+    info.fragment_source(fragment)
+    shader = gpu.shader.create_from_info(info)
+    _shaders[key] = shader
+    return shader
+
+
+def _vertex_buffer(inputs):
+    import gpu
+    fmt = gpu.types.GPUVertFormat()
+    names = ["p_position", "p_normal", "p_tangent"] + [f"p_lobe{k}" for k in
+                                                        range(lobe_vec4_count(inputs.order, inputs.lobes))]
+    for name in names:
+        fmt.attr_add(id=name, comp_type="F32", len=inputs.attributes[name].shape[1], fetch_mode="FLOAT")
+    vbo = gpu.types.GPUVertBuf(fmt, inputs.vertex_count)
+    for name in names:
+        vbo.attr_fill(name, inputs.attributes[name])
+    return vbo
+
+
+def shade_offscreen(inputs):
+    """Shades every vertex of `inputs` on the GPU, one vertex per pixel of an
+    RGBA32F offscreen buffer, and reads it back: (rgb (V, 3), visibility (V,))
+    float32, unclamped (what `_penumbra.shade_pose` returns). Needs a GPU
+    (gpu_unavailable_reason() is None) and a GPU context: under a window
+    (e.g. xvfb-run), or after gpu.init() in the bpy 5.x module."""
+    import gpu
+    n = inputs.vertex_count
+    width = min(READBACK_WIDTH, max(n, 1))
+    height = max(1, -(-n // width))
+    shader = shader_for(inputs.order, inputs.lobes, inputs.model, True)
+    batch = gpu.types.GPUBatch(type="POINTS", buf=_vertex_buffer(inputs))
+    ubo = gpu.types.GPUUniformBuf(inputs.uniforms)
+    offscreen = gpu.types.GPUOffScreen(width, height, format="RGBA32F")
+    # A flat Buffer to read into: Blender 3.4's (height, width, 4) Buffer
+    # hands numpy wrong strides.
+    pixels = gpu.types.Buffer("FLOAT", width * height * 4)
+    try:
+        with offscreen.bind():
+            framebuffer = gpu.state.active_framebuffer_get()
+            framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0))
+            gpu.state.blend_set("NONE")
+            gpu.state.depth_test_set("NONE")
+            if hasattr(gpu.state, "program_point_size_set"):
+                gpu.state.program_point_size_set(True)
+            shader.bind()
+            shader.uniform_block("shading", ubo)
+            shader.uniform_float("readback_size", (float(width), float(height)))
+            batch.draw(shader)
+            framebuffer.read_color(0, 0, width, height, 4, 0, "FLOAT", data=pixels)
+            if hasattr(gpu.state, "program_point_size_set"):
+                gpu.state.program_point_size_set(False)
+    finally:
+        offscreen.free()
+    flat = np.asarray(pixels, dtype=np.float32).reshape(-1, 4)[:n]
+    return np.ascontiguousarray(flat[:, :3]), np.ascontiguousarray(flat[:, 3])
+
+
+class DrawBatch:
+    """The GPU objects of one pose of one object, for the viewport."""
+
+    def __init__(self, inputs):
+        import gpu
+        self.shader = shader_for(inputs.order, inputs.lobes, inputs.model, False)
+        indices = gpu.types.GPUIndexBuf(type="TRIS", seq=np.ascontiguousarray(inputs.triangles, dtype=np.int32))
+        self.batch = gpu.types.GPUBatch(type="TRIS", buf=_vertex_buffer(inputs), elem=indices)
+        self.ubo = gpu.types.GPUUniformBuf(inputs.uniforms)
+
+    def draw(self, view_projection):
+        import gpu
+        self.shader.bind()
+        self.shader.uniform_block("shading", self.ubo)
+        self.shader.uniform_float("ViewProjectionMatrix", view_projection)
+        self.shader.uniform_float("depth_bias", DEPTH_BIAS)
+        self.batch.draw(self.shader)
+
+
+# Blender integration: settings, handlers, the draw callback ---------------------
+
+class _Preview:
+    def __init__(self):
+        self.inputs = None   # PoseInputs waiting to be uploaded
+        self.batch = None    # DrawBatch being drawn
+
+
+_previews = {}        # object name -> _Preview
+_draw_handle = None
+last_timings = {}     # seconds of the last update and upload (read by benchmarks)
+
+
+def _set_status(scene, message):
+    settings = scene.penumbra.visibility
+    if settings.gpu_preview_status != message:
+        settings.gpu_preview_status = message
+        if message:
+            print(f"penumbra: GPU preview: {message}")
+
+
+def _enabled_objects(scene):
+    for obj in scene.objects:
+        settings = getattr(obj, "penumbra_visibility", None)
+        if settings is not None and settings.enabled and obj.type == "MESH":
+            yield obj
+
+
+def update(scene, depsgraph=None):
+    """Recomputes the preview's inputs of every enabled object (CPU part); the
+    next viewport draw uploads them. Never raises: problems go to the scene's
+    gpu_preview_status."""
+    global last_timings
+    try:
+        settings = scene.penumbra.visibility
+        if not settings.gpu_preview:
+            return
+        if native.module is None:
+            _set_status(scene, f"the compiled core did not load: {native.load_error}")
+            return
+        reason = gpu_unavailable_reason()
+        if reason:
+            _set_status(scene, reason)
+            return
+        seen, problems = set(), []
+        for obj in _enabled_objects(scene):
+            seen.add(obj.name)
+            try:
+                inputs = object_inputs(obj, scene, depsgraph)
+            except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
+                problems.append(f"{obj.name}: {error}")
+                _previews.pop(obj.name, None)
+                continue
+            _previews.setdefault(obj.name, _Preview()).inputs = inputs
+            last_timings = dict(inputs.seconds)
+        for name in [n for n in _previews if n not in seen]:
+            del _previews[name]
+        if not seen:
+            problems.append("no object has Shade from Model on")
+        _set_status(scene, "; ".join(problems))
+    except Exception as error:  # a handler must never raise into Blender
+        try:
+            _set_status(scene, f"update failed: {error}")
+        except Exception:
+            pass
+
+
+def _tag_redraw():
+    wm = getattr(bpy.context, "window_manager", None)
+    for window in (wm.windows if wm else ()):
+        for area in window.screen.areas:
+            if area.type == "VIEW_3D":
+                area.tag_redraw()
+
+
+def toggled(scene):
+    """gpu_preview switched: report the GPU's absence, or compute the preview now."""
+    if not scene.penumbra.visibility.gpu_preview:
+        _previews.clear()
+        _set_status(scene, "")
+    else:
+        reason = gpu_unavailable_reason()
+        if reason:
+            _previews.clear()
+            _set_status(scene, reason)
+        else:
+            update(scene)
+    _tag_redraw()
+
+
+def request_refresh():
+    """Object settings changed in the UI (BRDF, exponent, ...): recompute."""
+    scene = bpy.context.scene if bpy.context else None
+    if scene is not None and scene.penumbra.visibility.gpu_preview:
+        update(scene)
+        _tag_redraw()
+
+
+def _draw():
+    """SpaceView3D POST_VIEW callback: upload what changed, draw. Never raises."""
+    global last_timings
+    if not _previews:
+        return
+    scene = bpy.context.scene
+    try:
+        if not scene.penumbra.visibility.gpu_preview:
+            return
+        import gpu
+        view_projection = bpy.context.region_data.perspective_matrix
+        gpu.state.depth_test_set("LESS_EQUAL")
+        gpu.state.depth_mask_set(True)
+        gpu.state.blend_set("NONE")
+        for name, preview in list(_previews.items()):
+            obj = scene.objects.get(name)
+            if obj is None or not obj.penumbra_visibility.enabled or not obj.visible_get():
+                continue
+            if preview.inputs is not None:
+                t0 = time.perf_counter()
+                preview.batch = DrawBatch(preview.inputs)
+                preview.inputs = None
+                last_timings["upload"] = time.perf_counter() - t0
+            if preview.batch is not None:
+                preview.batch.draw(view_projection)
+        gpu.state.depth_mask_set(False)
+        gpu.state.depth_test_set("NONE")
+    except Exception as error:  # never raise inside Blender's draw loop
+        _previews.clear()
+        try:
+            _set_status(scene, f"drawing failed: {error}")
+        except Exception:
+            pass
+
+
+def _armature_or_view_changed(scene, depsgraph):
+    relevant = any(isinstance(u.id, bpy.types.World) or
+                   (isinstance(u.id, bpy.types.Object) and u.id.type == "CAMERA") for u in depsgraph.updates)
+    return relevant or runtime._drives_enabled_object(scene, depsgraph.updates)
+
+
+# runtime._busy: a bake is posing the scene frame by frame (runtime.paused),
+# or the CPU run time is writing its attributes.
+@persistent
+def on_frame_change(scene, depsgraph=None):
+    if scene.penumbra.visibility.gpu_preview and not runtime._busy:
+        update(scene, depsgraph)
+
+
+@persistent
+def on_depsgraph_update(scene, depsgraph):
+    if scene.penumbra.visibility.gpu_preview and not runtime._busy and _armature_or_view_changed(scene, depsgraph):
+        update(scene, depsgraph)
+
+
+@persistent
+def on_load(*_args):
+    """A file was opened: forget the last file's objects; a file saved with the
+    preview on shows it at once."""
+    _previews.clear()
+    _mesh_buffers.clear()
+    scene = getattr(bpy.context, "scene", None)
+    if scene is not None and scene.penumbra.visibility.gpu_preview:
+        update(scene)
+
+
+def register():
+    global _draw_handle
+    for handlers, fn in ((bpy.app.handlers.frame_change_post, on_frame_change),
+                         (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
+                         (bpy.app.handlers.load_post, on_load)):
+        if fn not in handlers:
+            handlers.append(fn)
+    if _draw_handle is None:
+        _draw_handle = bpy.types.SpaceView3D.draw_handler_add(_draw, (), "WINDOW", "POST_VIEW")
+
+
+def unregister():
+    global _draw_handle
+    if _draw_handle is not None:
+        bpy.types.SpaceView3D.draw_handler_remove(_draw_handle, "WINDOW")
+        _draw_handle = None
+    for handlers, fn in ((bpy.app.handlers.frame_change_post, on_frame_change),
+                         (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
+                         (bpy.app.handlers.load_post, on_load)):
+        while fn in handlers:
+            handlers.remove(fn)
+    _previews.clear()
+    _mesh_buffers.clear()
+    _shaders.clear()

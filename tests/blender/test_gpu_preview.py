@@ -1,0 +1,245 @@
+"""The GPU viewport preview (addon/penumbra/visibility/gpu_preview.py).
+
+In every Blender (headless, so without a GPU): the scene setting, what
+turning it on says when there is no GPU, that the attributes and renders do
+not change, that unregister removes the draw callback, and the generated
+shader and uniform block. Then, in a child process that has a GPU, the GPU
+shading against the CPU shading of the same poses, per vertex:
+gpu_preview_check.py in Debian's Blender 3.4 in a real window under Xvfb
+(Mesa's llvmpipe, OpenGL 4.5), and in the bpy 5.2 module after gpu.init()
+(EGL, the same llvmpipe). Both child processes run from each of the three
+test suites: they need only the `blender`, `xvfb-run` and .venv313 programs
+that scripts/install_deps.sh installs."""
+
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+
+import bpy
+import numpy as np
+import pytest
+
+import penumbra
+from penumbra import compat, native
+from penumbra.visibility import gpu_preview, preview_shader, runtime
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+import visibility_character  # noqa: E402
+
+# The goal: GPU and CPU shading of a vertex differ by at most this (absolute,
+# scene-linear; measured ~1e-5, float rounding).
+GPU_TOLERANCE = 1e-3
+CHECK = os.path.join(HERE, "gpu_preview_check.py")
+
+
+@pytest.fixture
+def addon(factory_scene):
+    penumbra.register()
+    try:
+        yield factory_scene
+    finally:
+        runtime.forget()
+        penumbra.unregister()
+
+
+def attributes(obj):
+    mesh = obj.data
+    rgba = np.empty(len(mesh.vertices) * 4, dtype=np.float32)
+    mesh.attributes[runtime.SHADING_ATTRIBUTE].data.foreach_get("color", rgba)
+    ao = np.empty(len(mesh.vertices), dtype=np.float32)
+    mesh.attributes[runtime.VISIBILITY_ATTRIBUTE].data.foreach_get("value", ao)
+    return rgba.reshape(-1, 4), ao
+
+
+def baked_character(scene, tmp_path):
+    obj, rig = visibility_character.build(frames=24)
+    bpy.context.view_layer.objects.active = obj
+    obj.select_set(True)
+    world = bpy.data.worlds.new("Uniform")
+    compat.ensure_nodes(world).nodes["Background"].inputs["Color"].default_value = (0.8, 0.9, 1.0, 1.0)
+    scene.world = world
+    assert bpy.ops.penumbra.bake_visibility(frame_start=1, frame_end=24, frame_step=2, rays=32, lobes=2,
+                                            filepath=os.path.join(str(tmp_path), "model.pzh")) == {"FINISHED"}
+    obj.penumbra_visibility.enabled = True
+    return obj
+
+
+def render(scene, path):
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples = 1
+    scene.cycles.use_denoising = False
+    scene.render.resolution_x, scene.render.resolution_y = 24, 24
+    scene.render.filepath = path
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(path)
+    pixels = np.array(image.pixels[:], dtype=np.float32)
+    bpy.data.images.remove(image)
+    return pixels
+
+
+def test_gpu_preview_is_a_scene_setting_that_starts_off(addon):
+    settings = addon.penumbra.visibility
+    assert settings.gpu_preview is False
+    assert settings.gpu_preview_status == ""
+    assert gpu_preview._draw_handle is not None  # registered with the add-on, drawing nothing while off
+
+
+def test_turning_the_preview_on_without_a_gpu_says_so_and_changes_no_attribute_or_render(addon, tmp_path):
+    obj = baked_character(addon, tmp_path)
+    assert bpy.ops.penumbra.setup_material() == {"FINISHED"}
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    addon.collection.objects.link(camera)
+    addon.camera = camera
+    camera.location = (0.0, -7.0, 1.4)
+    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
+    before = {}
+    for frame in (4, 10):
+        addon.frame_set(frame)
+        before[frame] = attributes(obj)
+    render_before = render(addon, os.path.join(str(tmp_path), "off.png"))
+
+    settings = addon.penumbra.visibility
+    settings.gpu_preview = True
+    # These suites run headless: there is no GPU, and the setting says so.
+    assert gpu_preview.gpu_unavailable_reason() is not None
+    assert settings.gpu_preview_status.startswith("no GPU available"), settings.gpu_preview_status
+    assert not gpu_preview._previews
+    gpu_preview._draw()  # the draw callback draws nothing and does not raise
+    for frame in (4, 10):
+        addon.frame_set(frame)
+        rgba, ao = attributes(obj)
+        np.testing.assert_array_equal(rgba, before[frame][0])
+        np.testing.assert_array_equal(ao, before[frame][1])
+    assert not gpu_preview._previews
+    np.testing.assert_array_equal(render(addon, os.path.join(str(tmp_path), "on.png")), render_before)
+    # A pose edit goes through the depsgraph handler: still nothing, still no error.
+    rig = obj.modifiers["Armature"].object
+    rig.pose.bones["forearm.L"].rotation_euler[2] += 0.3
+    bpy.context.view_layer.update()
+    assert settings.gpu_preview_status.startswith("no GPU available")
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+
+    settings.gpu_preview = False
+    assert settings.gpu_preview_status == ""
+
+
+def test_unregister_removes_the_draw_callback_and_the_handlers(factory_scene):
+    penumbra.register()
+    assert gpu_preview._draw_handle is not None
+    assert gpu_preview.on_frame_change in bpy.app.handlers.frame_change_post
+    penumbra.unregister()
+    assert gpu_preview._draw_handle is None
+    assert gpu_preview.on_frame_change not in bpy.app.handlers.frame_change_post
+    assert gpu_preview.on_depsgraph_update not in bpy.app.handlers.depsgraph_update_post
+    assert gpu_preview.on_load not in bpy.app.handlers.load_post
+
+
+def test_the_shader_is_written_for_every_model_a_bake_can_make_and_others_are_refused(addon):
+    for order in range(1, preview_shader.MAX_ORDER + 1):
+        for lobes in range(1, preview_shader.MAX_LOBES + 1):
+            # Inputs within the 16 vertex attributes OpenGL guarantees.
+            assert 3 + preview_shader.lobe_vec4_count(order, lobes) <= 16
+            for model in preview_shader.MODELS:
+                for readback in (False, True):
+                    source = preview_shader.vertex_source(order, lobes, model, readback)
+                    assert source.count("{") == source.count("}")
+                    assert ("gl_VertexID" in source) == readback
+    with pytest.raises(ValueError, match="orders 1 to 8"):
+        preview_shader.check_configuration(9, 2, "diffuse")
+    with pytest.raises(ValueError, match="1 to 4 lobes"):
+        preview_shader.check_configuration(4, 5, "diffuse")
+    with pytest.raises(ValueError, match="BRDFs"):
+        preview_shader.check_configuration(4, 2, "ward")
+
+
+def test_the_uniform_block_holds_the_lighting_the_operator_blocks_and_the_camera(addon):
+    core = native.require()
+    order = 4
+    lighting = np.arange(48, dtype=np.float64).reshape(16, 3) / 10.0
+    data = np.frombuffer(preview_shader.uniform_data(order, lighting, "phong", 7.0, (1.0, 2.0, 3.0), (0.5, 0.5, 0.5)),
+                         dtype=np.float32).reshape(-1, 4)
+    _, total = preview_shader.operator_block_layout(order)
+    assert total == 30  # Σ (4 − |m|)² over m = 0..3
+    assert data.shape == (2 * 16 + math.ceil(total / 4) + 1, 4)
+    np.testing.assert_allclose(data[:16, :3], lighting, rtol=1e-7)
+    np.testing.assert_allclose(data[-1, :3], (1.0, 2.0, 3.0))
+    # The blocks put back together are the core's dense operator.
+    flat = data[32:32 + math.ceil(total / 4)].reshape(-1)[:total]
+    dense = np.zeros((16, 16))
+    offsets, _ = preview_shader.operator_block_layout(order)
+    for m in range(-(order - 1), order):
+        a, size = abs(m), order - abs(m)
+        block = flat[offsets[a]:offsets[a] + size * size].reshape(size, size)
+        rows = [preview_shader.sh_index(l, m) for l in range(a, order)]
+        dense[np.ix_(rows, rows)] = block
+    np.testing.assert_allclose(dense, core.phong_operator(order, 7.0), atol=1e-7)
+
+
+def run_check(command, capsys, what, timeout=1500):
+    env = dict(os.environ)
+    env.pop("PYTHONPATH", None)
+    proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
+    lines = [line for line in proc.stdout.splitlines() if line.startswith("RESULT ")]
+    assert len(lines) == 1, f"exit {proc.returncode}\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}"
+    result = json.loads(lines[0][len("RESULT "):])
+    assert result["ok"], result.get("error")
+    with capsys.disabled():
+        print(f"\n{what}: {result['renderer']}")
+        pipeline, sweep = result["pipeline"], result["random"]
+        print(f"  {pipeline['vertices']} vertices, 3 unseen poses x 3 BRDFs: max |GPU - CPU| "
+              f"rgb {pipeline['max_abs_rgb']:.2e}, visibility {pipeline['max_abs_visibility']:.2e}")
+        print(f"  {sweep['configurations']} configurations (orders, lobes, BRDFs), random data: "
+              f"max |GPU - CPU| {sweep['max_abs']:.2e} ({sweep['max_relative']:.2e} relative)")
+        for t in result["timing"]:
+            print(f"  frame time at {t['vertices']} vertices: {t['frame_ms']:.1f} ms = CPU {t['cpu_ms']:.1f} "
+                  f"(read {t['cpu_split_ms']['read']:.1f}, pose->lobes {t['cpu_split_ms']['pose_to_lobes']:.1f}, "
+                  f"frames {t['cpu_split_ms']['frames']:.1f}, pack {t['cpu_split_ms']['pack']:.1f}) "
+                  f"+ upload {t['upload_ms']:.1f} + draw 1280x720 {t['gpu_draw_1280x720_ms']:.1f}; "
+                  f"per-vertex shading + readback {t['gpu_shade_readback_ms']:.1f} ms")
+            if "viewport" in t:
+                v = t["viewport"]
+                print(f"    viewport {v['region'][0]}x{v['region'][1]}: redraw {v['redraw_preview_off_ms']:.0f} ms "
+                      f"preview off, {v['redraw_preview_on_ms']:.0f} ms on; frame change + redraw "
+                      f"{v['frame_change_and_redraw_ms']:.0f} ms")
+    return result
+
+
+def check_result(result):
+    pipeline, sweep = result["pipeline"], result["random"]
+    assert result["unavailable"] is None
+    assert 9000 <= pipeline["vertices"] <= 11000
+    assert pipeline["max_abs_rgb"] <= GPU_TOLERANCE
+    assert pipeline["max_abs_visibility"] <= GPU_TOLERANCE
+    assert pipeline["max_abs_attributes"] <= GPU_TOLERANCE
+    # Non-trivial shading was compared (an environment with a sun; Phong highlights).
+    assert all(case["rgb_max"] > 0.5 for case in pipeline["cases"])
+    assert sweep["max_abs"] <= GPU_TOLERANCE
+    assert sweep["invalid_vertices"] > 0  # invalid vertices were exercised: 0 on both sides
+
+
+def test_gpu_shading_matches_the_cpu_in_blender_3_4_under_xvfb(capsys):
+    blender, xvfb = shutil.which("blender"), shutil.which("xvfb-run")
+    assert blender and xvfb, "Debian's blender and xvfb-run are installed by scripts/install_deps.sh"
+    result = run_check([xvfb, "-a", blender, "--factory-startup", "--python", CHECK, "--",
+                        "--vertices", "10000", "--timing-vertices", "100000", "--sweep", "full"],
+                       capsys, "Blender 3.4, window under Xvfb")
+    assert result["blender"].startswith("3.4") and not result["background"]
+    check_result(result)
+    assert result["random"]["configurations"] == 8 * 4 * 3
+    assert [t["vertices"] > 90000 for t in result["timing"]] == [False, True]
+    # The preview was drawn by Blender's own viewport, through the draw callback.
+    assert all(t["viewport"]["drawn"] and t["viewport"]["status"] == "" for t in result["timing"])
+
+
+def test_gpu_shading_matches_the_cpu_in_the_bpy_5_2_module_with_gpu_init(capsys):
+    python = os.path.join(ROOT, ".venv313", "bin", "python")
+    assert os.path.exists(python), "the bpy 5.2 module is installed by scripts/install_deps.sh"
+    result = run_check([python, CHECK, "--gpu-init", "--vertices", "10000", "--sweep", "production"],
+                       capsys, "bpy 5.2 module, gpu.init() (EGL)")
+    assert result["blender"].startswith("5.2") and result["background"]
+    check_result(result)
