@@ -171,30 +171,33 @@ void check_pose_model(const PoseModel& m) {
         if (!std::isfinite(x)) throw ArgumentError("model has a non-finite value");
 }
 
-PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence>& influence,
-                         const FitSettings& settings, const Progress& progress, FitReport* report_out) {
-    check_fit_settings(settings);
-    check_training_set(set);
-    if (set.settings.weighting != Weighting::Plain && set.settings.weighting != Weighting::Cosine)
-        throw ArgumentError("unknown weighting");
-    if (set.frames.empty()) throw ArgumentError("the training set has no frames");
-    if (set.vertex_count == 0) throw ArgumentError("the training set has no vertices");
-    const int order = set.settings.order, lobes = settings.lobes, n_sh = order * order;
-    const int ppl = params_per_lobe(order), d = lobes * ppl;
-    const std::size_t V = set.vertex_count, F = set.frames.size();
-    FitReport report;
+namespace {
 
-    // ZH lobes per vertex and frame (fig. 2b): rows of B.
-    const auto t_zh = Clock::now();
-    Eigen::MatrixXf B(F, V * d);
-    ErrorSums zh_errors;
+// Shapes every step of the fit shares: SH order and count, lobes, d lobe
+// parameters per vertex, V vertices, F frames, fpj features per joint, k
+// pose features (active joints × fpj).
+struct FitShape {
+    int order, lobes, n_sh, d, fpj;
+    std::size_t V, F, k;
+};
+
+// Step 1 (fig. 2b): ZH lobes per vertex and frame, the rows of B (F × V·d).
+// Each vertex's frames are fitted from a reference fit of its mean
+// visibility (zh_fit.hpp). Adds the lobes' errors against the baked SH to
+// `errors`; progress 0 → 0.8.
+Eigen::MatrixXf fit_frame_lobes(const TrainingSet& set, const FitSettings& settings, const FitShape& shape,
+                                const Progress& progress, ErrorSums& errors) {
+    const int order = shape.order, n_sh = shape.n_sh, d = shape.d;
+    const std::size_t F = shape.F;
+    Eigen::MatrixXf B(F, shape.V * d);
     std::mutex merge_mutex;
     ZhFitSettings zs;
     zs.order = order;
-    zs.lobes = lobes;
+    zs.lobes = shape.lobes;
     zs.iterations = settings.zh_iterations;
     zs.axis_prior = settings.axis_prior;
-    parallel_for(V, {settings.threads, 16, "visibility.zh_fit", 0.0, 0.8}, [&](std::size_t begin, std::size_t end) {
+    parallel_for(shape.V, {settings.threads, 16, "visibility.zh_fit", 0.0, 0.8},
+                 [&](std::size_t begin, std::size_t end) {
         ErrorSums local;
         std::vector<double> mean(n_sh), sh(n_sh), ref(d), params(d), fitted(n_sh);
         for (std::size_t v = begin; v < end; ++v) {
@@ -208,235 +211,300 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
                 for (int i = 0; i < n_sh; ++i) sh[i] = truth[i];
                 fit_zh_lobes(zs, sh.data(), ref.data(), params.data());
                 for (int i = 0; i < d; ++i) B(f, v * d + i) = float(params[i]);
-                lobes_to_sh(order, lobes, params.data(), fitted.data());
+                lobes_to_sh(order, shape.lobes, params.data(), fitted.data());
                 local.add(order, fitted.data(), truth);
             }
         }
         std::lock_guard<std::mutex> lock(merge_mutex);
-        zh_errors.merge(local);
+        errors.merge(local);
     }, progress);
-    report.zh_fit = zh_errors.result();
-    report.seconds_zh_fit = seconds_since(t_zh);
+    return B;
+}
 
-    // Active joints and the pose matrix A (without its bias column).
-    const auto t_linear = Clock::now();
-    report.joints = choose_active_joints(set, influence, settings.joint_tolerance_degrees);
-    std::vector<std::size_t> active;
-    for (std::size_t b = 0; b < report.joints.size(); ++b)
-        if (report.joints[b].active) active.push_back(b);
-    if (active.size() > 65535) throw ArgumentError("too many active joints");
-    const int fpj = features_per_joint(settings.features);
-    const std::size_t k = active.size() * fpj;
-    Eigen::MatrixXd A(F, k);
-    for (std::size_t f = 0; f < F; ++f)
+// The pose matrix A (F × k, without its bias column): the features of the
+// active joints per frame.
+Eigen::MatrixXd pose_matrix(const TrainingSet& set, const std::vector<std::size_t>& active, PoseFeatures features,
+                            const FitShape& shape) {
+    Eigen::MatrixXd A(shape.F, shape.k);
+    for (std::size_t f = 0; f < shape.F; ++f)
         for (std::size_t j = 0; j < active.size(); ++j) {
             double phi[9];
-            joint_features(settings.features, set.frames[f].bone_rotations.data() + 9 * active[j], phi);
-            for (int a = 0; a < fpj; ++a) A(f, j * fpj + a) = phi[a];
+            joint_features(features, set.frames[f].bone_rotations.data() + 9 * active[j], phi);
+            for (int a = 0; a < shape.fpj; ++a) A(f, j * shape.fpj + a) = phi[a];
         }
+    return A;
+}
 
-    // Held-out frames: every k-th, when there are enough frames.
-    std::vector<std::size_t> train, holdout;
-    const int stride = settings.holdout_stride;
+// The ridge solution's pieces for a subset of frames: feature and lobe
+// parameter means, and the centred SVD A_c = U S Vᵀ with Uᵀ·B_c.
+struct RidgeSolver {
+    Eigen::VectorXd feature_mean, s;
+    Eigen::MatrixXd V;
+    Eigen::MatrixXf ut_b;
+    Eigen::RowVectorXf b_mean;
+
+    // s/(s² + λ) per singular value, λ = ρ·s_max²; 0 for s <= 1e-12·s_max.
+    Eigen::VectorXd shrink(double rho) const {
+        const double smax = s.size() ? s[0] : 0.0;
+        const double lambda = rho * smax * smax;
+        Eigen::VectorXd w(s.size());
+        for (Eigen::Index i = 0; i < s.size(); ++i)
+            w[i] = s[i] > 1e-12 * smax ? s[i] / (s[i] * s[i] + lambda) : 0.0;
+        return w;
+    }
+    // W = V·diag(s/(s²+λ))·Uᵀ·B_c (k × V·d).
+    Eigen::MatrixXf weights(double rho) const { return (V * shrink(rho).asDiagonal()).cast<float>() * ut_b; }
+};
+
+// A model as stored, per vertex: the joints kept (none: a constant vertex)
+// and the bias with the feature means folded in.
+struct PrunedModel {
+    std::vector<std::vector<std::uint16_t>> kept;
+    std::vector<float> bias;
+};
+
+// Steps 2–3: the linear model on top of the ZH lobes B and the pose matrix A.
+class LinearFit {
+public:
+    LinearFit(const TrainingSet& set, const FitSettings& settings, const FitShape& shape, const Eigen::MatrixXd& A,
+              const Eigen::MatrixXf& B)
+        : set_(set), settings_(settings), shape_(shape), A_(A), B_(B) {}
+
+    RidgeSolver solver(const std::vector<std::size_t>& rows) const;
+    // Errors of lobe parameters predicted for `rows` (rows.size() × V·d) against their baked SH.
+    Errors predicted_errors(const std::vector<std::size_t>& rows, const Eigen::MatrixXf& predicted) const;
+    // Per vertex: constant, or the joints that matter. `rows` are the frames
+    // the solver was fitted on; W its ridge weights (k × V·d). Adds the
+    // pruned model's errors on `rows` to `errors`.
+    PrunedModel prune(const std::vector<std::size_t>& rows, const RidgeSolver& sol, const Eigen::MatrixXf& W,
+                      ErrorSums& errors, const Progress& progress, double from, double to) const;
+    // Errors of a pruned model (as stored) on frames it was not fitted on.
+    Errors pruned_errors(const PrunedModel& pruned, const Eigen::MatrixXf& W,
+                         const std::vector<std::size_t>& rows) const;
+
+private:
+    // Scratch of one pruning worker.
+    struct PruneScratch {
+        Eigen::MatrixXd dropped, trial, prediction;
+        std::vector<Eigen::MatrixXd> parts;
+        std::vector<std::pair<double, std::size_t>> norms;
+        std::vector<double> params, sh;
+    };
+    void prune_vertex(std::size_t v, const std::vector<std::size_t>& rows, const RidgeSolver& sol,
+                      const Eigen::MatrixXf& W, const Eigen::MatrixXd& Ac, PruneScratch& scratch,
+                      PrunedModel& out) const;
+    void add_errors(const std::vector<std::size_t>& rows, std::size_t v, PruneScratch& scratch,
+                    ErrorSums& errors) const;
+
+    const TrainingSet& set_;
+    const FitSettings& settings_;
+    const FitShape& shape_;
+    const Eigen::MatrixXd& A_;
+    const Eigen::MatrixXf& B_;
+};
+
+RidgeSolver LinearFit::solver(const std::vector<std::size_t>& rows) const {
+    const std::size_t k = shape_.k;
+    RidgeSolver sol;
+    Eigen::MatrixXd a(rows.size(), k);
+    Eigen::MatrixXf b(rows.size(), shape_.V * shape_.d);
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+        a.row(r) = A_.row(rows[r]);
+        b.row(r) = B_.row(rows[r]);
+    }
+    sol.feature_mean = a.colwise().mean().transpose();
+    sol.b_mean = b.colwise().mean();
+    if (k == 0) return sol;
+    a.rowwise() -= sol.feature_mean.transpose();
+    b.rowwise() -= sol.b_mean;
+    // JacobiSVD: BDCSVD (Eigen 3.4) returned NaN now and then on the exactly
+    // zero columns that unmoving feature entries leave.
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+    sol.s = svd.singularValues();
+    sol.V = svd.matrixV();
+    sol.ut_b = svd.matrixU().transpose().cast<float>() * b;
+    return sol;
+}
+
+Errors LinearFit::predicted_errors(const std::vector<std::size_t>& rows, const Eigen::MatrixXf& predicted) const {
+    const int order = shape_.order, n_sh = shape_.n_sh, d = shape_.d;
+    ErrorSums total;
+    std::mutex merge_mutex;
+    parallel_for(shape_.V, {settings_.threads, 256, "visibility.model_errors"}, [&](std::size_t begin,
+                                                                                   std::size_t end) {
+        ErrorSums local;
+        std::vector<double> params(d), sh(n_sh);
+        for (std::size_t v = begin; v < end; ++v)
+            for (std::size_t r = 0; r < rows.size(); ++r) {
+                for (int i = 0; i < d; ++i) params[i] = predicted(r, v * d + i);
+                lobes_to_sh(order, shape_.lobes, params.data(), sh.data());
+                local.add(order, sh.data(), set_.frames[rows[r]].visibility.data() + v * n_sh);
+            }
+        std::lock_guard<std::mutex> lock(merge_mutex);
+        total.merge(local);
+    });
+    return total.result();
+}
+
+// Adds the errors of scratch.prediction (vertex v on `rows`) to `errors`.
+void LinearFit::add_errors(const std::vector<std::size_t>& rows, std::size_t v, PruneScratch& scratch,
+                           ErrorSums& errors) const {
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+        for (int i = 0; i < shape_.d; ++i) scratch.params[i] = scratch.prediction(r, i);
+        lobes_to_sh(shape_.order, shape_.lobes, scratch.params.data(), scratch.sh.data());
+        errors.add(shape_.order, scratch.sh.data(), set_.frames[rows[r]].visibility.data() + v * shape_.n_sh);
+    }
+}
+
+// One vertex: constant when its parameters vary less than
+// constant_tolerance (RMS); otherwise its joints' contributions, smallest
+// first, are dropped while the dropped part stays under prune_tolerance.
+// Leaves the kept part's prediction on `rows` in scratch.prediction.
+void LinearFit::prune_vertex(std::size_t v, const std::vector<std::size_t>& rows, const RidgeSolver& sol,
+                             const Eigen::MatrixXf& W, const Eigen::MatrixXd& Ac, PruneScratch& scratch,
+                             PrunedModel& out) const {
+    const std::size_t R = rows.size(), n_active = scratch.parts.size();
+    const int d = shape_.d, fpj = shape_.fpj;
+    const Eigen::RowVectorXd mean = sol.b_mean.segment(v * d, d).cast<double>();
+    double variation = 0.0;
+    for (std::size_t r = 0; r < R; ++r)
+        for (int i = 0; i < d; ++i) variation += std::pow(double(B_(rows[r], v * d + i)) - mean[i], 2);
+    variation = std::sqrt(variation / double(R * d));
+    std::vector<std::uint16_t>& keep = out.kept[v];
+    scratch.prediction = mean.replicate(R, 1);
+    if (shape_.k && variation > settings_.constant_tolerance) {
+        const Eigen::MatrixXd Wv = W.middleCols(v * d, d).cast<double>();
+        for (std::size_t j = 0; j < n_active; ++j) {
+            scratch.parts[j] = Ac.middleCols(j * fpj, fpj) * Wv.middleRows(j * fpj, fpj);
+            scratch.norms[j] = {scratch.parts[j].squaredNorm(), j};
+        }
+        std::sort(scratch.norms.begin(), scratch.norms.end());
+        scratch.dropped.setZero();
+        std::size_t first_kept = 0;
+        for (; first_kept < n_active; ++first_kept) {
+            scratch.trial = scratch.dropped + scratch.parts[scratch.norms[first_kept].second];
+            if (std::sqrt(scratch.trial.squaredNorm() / double(R * d)) > settings_.prune_tolerance) break;
+            scratch.dropped = scratch.trial;
+        }
+        for (std::size_t e = first_kept; e < n_active; ++e) keep.push_back(std::uint16_t(scratch.norms[e].second));
+        std::sort(keep.begin(), keep.end());
+        for (auto j : keep) scratch.prediction += scratch.parts[j];
+    }
+    // Bias with the feature means folded in: params = bias + Σ φ_j W_j.
+    Eigen::RowVectorXd bias = mean;
+    for (auto j : keep)
+        bias -= sol.feature_mean.segment(j * fpj, fpj).transpose() * W.block(j * fpj, v * d, fpj, d).cast<double>();
+    for (int i = 0; i < d; ++i) out.bias[v * d + i] = float(bias[i]);
+}
+
+PrunedModel LinearFit::prune(const std::vector<std::size_t>& rows, const RidgeSolver& sol, const Eigen::MatrixXf& W,
+                             ErrorSums& errors, const Progress& progress, double from, double to) const {
+    const std::size_t R = rows.size(), n_active = shape_.k / shape_.fpj;
+    PrunedModel out;
+    out.kept.resize(shape_.V);
+    out.bias.assign(shape_.V * shape_.d, 0.0f);
+    Eigen::MatrixXd Ac(R, shape_.k);
+    for (std::size_t r = 0; r < R; ++r) Ac.row(r) = A_.row(rows[r]);
+    if (shape_.k) Ac.rowwise() -= sol.feature_mean.transpose();
+    std::mutex merge_mutex;
+    parallel_for(shape_.V, {settings_.threads, 64, "visibility.prune", from, to}, [&](std::size_t begin,
+                                                                                     std::size_t end) {
+        ErrorSums local;
+        PruneScratch scratch{Eigen::MatrixXd(R, shape_.d), Eigen::MatrixXd(R, shape_.d),
+                             Eigen::MatrixXd(R, shape_.d), std::vector<Eigen::MatrixXd>(n_active),
+                             std::vector<std::pair<double, std::size_t>>(n_active),
+                             std::vector<double>(shape_.d), std::vector<double>(shape_.n_sh)};
+        for (std::size_t v = begin; v < end; ++v) {
+            prune_vertex(v, rows, sol, W, Ac, scratch, out);
+            add_errors(rows, v, scratch, local);
+        }
+        std::lock_guard<std::mutex> lock(merge_mutex);
+        errors.merge(local);
+    }, progress);
+    return out;
+}
+
+Errors LinearFit::pruned_errors(const PrunedModel& pruned, const Eigen::MatrixXf& W,
+                                const std::vector<std::size_t>& rows) const {
+    const int order = shape_.order, n_sh = shape_.n_sh, d = shape_.d, fpj = shape_.fpj;
+    ErrorSums total;
+    std::mutex merge_mutex;
+    parallel_for(shape_.V, {settings_.threads, 256, "visibility.pruned_errors"}, [&](std::size_t begin,
+                                                                                    std::size_t end) {
+        ErrorSums local;
+        std::vector<double> params(d), sh(n_sh);
+        for (std::size_t v = begin; v < end; ++v)
+            for (std::size_t r : rows) {
+                for (int i = 0; i < d; ++i) params[i] = pruned.bias[v * d + i];
+                for (auto j : pruned.kept[v])
+                    for (int a = 0; a < fpj; ++a) {
+                        const double phi = A_(r, j * fpj + a);
+                        for (int i = 0; i < d; ++i) params[i] += phi * W(j * fpj + a, v * d + i);
+                    }
+                lobes_to_sh(order, shape_.lobes, params.data(), sh.data());
+                local.add(order, sh.data(), set_.frames[r].visibility.data() + v * n_sh);
+            }
+        std::lock_guard<std::mutex> lock(merge_mutex);
+        total.merge(local);
+    });
+    return total.result();
+}
+
+// Held-out frames: every stride-th, when there are at least two strides of
+// frames; the rest train.
+void split_frames(std::size_t F, int stride, std::vector<std::size_t>& train, std::vector<std::size_t>& holdout) {
     const bool use_holdout = stride >= 2 && F >= std::size_t(2 * stride);
     for (std::size_t f = 0; f < F; ++f)
         (use_holdout && f % stride == std::size_t(stride - 1) ? holdout : train).push_back(f);
-    report.training_frames = F;
-    report.holdout_frames = holdout.size();
+}
 
-    // Ridge solution pieces for a subset of frames: centred SVD and Uᵀ·B_c.
-    struct Solver {
-        Eigen::VectorXd feature_mean, s;
-        Eigen::MatrixXd V;
-        Eigen::MatrixXf ut_b;
-        Eigen::RowVectorXf b_mean;
-    };
-    auto make_solver = [&](const std::vector<std::size_t>& rows) {
-        Solver sol;
-        Eigen::MatrixXd a(rows.size(), k);
-        Eigen::MatrixXf b(rows.size(), V * d);
-        for (std::size_t r = 0; r < rows.size(); ++r) {
-            a.row(r) = A.row(rows[r]);
-            b.row(r) = B.row(rows[r]);
-        }
-        sol.feature_mean = a.colwise().mean().transpose();
-        sol.b_mean = b.colwise().mean();
-        if (k == 0) return sol;
-        a.rowwise() -= sol.feature_mean.transpose();
-        b.rowwise() -= sol.b_mean;
-        // JacobiSVD: BDCSVD (Eigen 3.4) returned NaN now and then on the exactly
-        // zero columns that unmoving feature entries leave.
-        Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
-        sol.s = svd.singularValues();
-        sol.V = svd.matrixV();
-        sol.ut_b = svd.matrixU().transpose().cast<float>() * b;
-        return sol;
-    };
-    auto shrink = [](const Solver& sol, double rho) {
-        const double smax = sol.s.size() ? sol.s[0] : 0.0;
-        const double lambda = rho * smax * smax;
-        Eigen::VectorXd w(sol.s.size());
-        for (Eigen::Index i = 0; i < sol.s.size(); ++i) {
-            const double s = sol.s[i];
-            w[i] = s > 1e-12 * smax ? s / (s * s + lambda) : 0.0;
-        }
-        return w;
-    };
-    // Errors of params predicted for `rows` (rows.size() × V·d) against their baked SH.
-    auto sh_errors = [&](const std::vector<std::size_t>& rows, const Eigen::MatrixXf& predicted) {
-        ErrorSums total;
-        parallel_for(V, {settings.threads, 256, "visibility.model_errors"}, [&](std::size_t begin, std::size_t end) {
-            ErrorSums local;
-            std::vector<double> params(d), sh(n_sh);
-            for (std::size_t v = begin; v < end; ++v)
-                for (std::size_t r = 0; r < rows.size(); ++r) {
-                    for (int i = 0; i < d; ++i) params[i] = predicted(r, v * d + i);
-                    lobes_to_sh(order, lobes, params.data(), sh.data());
-                    local.add(order, sh.data(), set.frames[rows[r]].visibility.data() + v * n_sh);
-                }
-            std::lock_guard<std::mutex> lock(merge_mutex);
-            total.merge(local);
-        });
-        return total.result();
-    };
-
-    // Per vertex: constant, or the joints that matter. `rows` are the frames
-    // the solver was fitted on; W its ridge weights (k × V·d). Returns the
-    // stored form (bias with the feature means folded in, kept joints) and
-    // adds the pruned model's errors on `rows` to `errors`.
-    struct Pruned {
-        std::vector<std::vector<std::uint16_t>> kept;
-        std::vector<float> bias;
-    };
-    const std::size_t n_active = active.size();
-    auto prune = [&](const std::vector<std::size_t>& rows, const Solver& sol, const Eigen::MatrixXf& W,
-                     ErrorSums& errors, const Progress& prune_progress, double from, double to) {
-        const std::size_t R = rows.size();
-        Pruned out;
-        out.kept.resize(V);
-        out.bias.assign(V * d, 0.0f);
-        Eigen::MatrixXd Ac(R, k);
-        for (std::size_t r = 0; r < R; ++r) Ac.row(r) = A.row(rows[r]);
-        if (k) Ac.rowwise() -= sol.feature_mean.transpose();
-        parallel_for(V, {settings.threads, 64, "visibility.prune", from, to}, [&](std::size_t begin, std::size_t end) {
-            ErrorSums local;
-            Eigen::MatrixXd dropped(R, d), trial(R, d), prediction(R, d);
-            std::vector<Eigen::MatrixXd> parts(n_active);
-            std::vector<std::pair<double, std::size_t>> norms(n_active);
-            std::vector<double> params(d), sh(n_sh);
-            for (std::size_t v = begin; v < end; ++v) {
-                const Eigen::RowVectorXd mean = sol.b_mean.segment(v * d, d).cast<double>();
-                double variation = 0.0;
-                for (std::size_t r = 0; r < R; ++r)
-                    for (int i = 0; i < d; ++i) variation += std::pow(double(B(rows[r], v * d + i)) - mean[i], 2);
-                variation = std::sqrt(variation / double(R * d));
-                std::vector<std::uint16_t>& keep = out.kept[v];
-                prediction = mean.replicate(R, 1);
-                if (k && variation > settings.constant_tolerance) {
-                    const Eigen::MatrixXd Wv = W.middleCols(v * d, d).cast<double>();
-                    for (std::size_t j = 0; j < n_active; ++j) {
-                        parts[j] = Ac.middleCols(j * fpj, fpj) * Wv.middleRows(j * fpj, fpj);
-                        norms[j] = {parts[j].squaredNorm(), j};
-                    }
-                    std::sort(norms.begin(), norms.end());
-                    dropped.setZero();
-                    std::size_t first_kept = 0;
-                    for (; first_kept < n_active; ++first_kept) {
-                        trial = dropped + parts[norms[first_kept].second];
-                        if (std::sqrt(trial.squaredNorm() / double(R * d)) > settings.prune_tolerance) break;
-                        dropped = trial;
-                    }
-                    for (std::size_t e = first_kept; e < n_active; ++e) keep.push_back(std::uint16_t(norms[e].second));
-                    std::sort(keep.begin(), keep.end());
-                    for (auto j : keep) prediction += parts[j];
-                }
-                // Bias with the feature means folded in: params = bias + Σ φ_j W_j.
-                Eigen::RowVectorXd bias = mean;
-                for (auto j : keep)
-                    bias -= sol.feature_mean.segment(j * fpj, fpj).transpose() *
-                            W.block(j * fpj, v * d, fpj, d).cast<double>();
-                for (int i = 0; i < d; ++i) out.bias[v * d + i] = float(bias[i]);
-                for (std::size_t r = 0; r < R; ++r) {
-                    for (int i = 0; i < d; ++i) params[i] = prediction(r, i);
-                    lobes_to_sh(order, lobes, params.data(), sh.data());
-                    local.add(order, sh.data(), set.frames[rows[r]].visibility.data() + v * n_sh);
-                }
-            }
-            std::lock_guard<std::mutex> lock(merge_mutex);
-            errors.merge(local);
-        }, prune_progress);
-        return out;
-    };
-    // Errors of a pruned model (as stored) on frames it was not fitted on.
-    auto pruned_errors = [&](const Pruned& pruned, const Eigen::MatrixXf& W, const std::vector<std::size_t>& rows) {
-        ErrorSums total;
-        parallel_for(V, {settings.threads, 256, "visibility.pruned_errors"}, [&](std::size_t begin, std::size_t end) {
-            ErrorSums local;
-            std::vector<double> params(d), sh(n_sh);
-            for (std::size_t v = begin; v < end; ++v)
-                for (std::size_t r : rows) {
-                    for (int i = 0; i < d; ++i) params[i] = pruned.bias[v * d + i];
-                    for (auto j : pruned.kept[v])
-                        for (int a = 0; a < fpj; ++a) {
-                            const double phi = A(r, j * fpj + a);
-                            for (int i = 0; i < d; ++i) params[i] += phi * W(j * fpj + a, v * d + i);
-                        }
-                    lobes_to_sh(order, lobes, params.data(), sh.data());
-                    local.add(order, sh.data(), set.frames[r].visibility.data() + v * n_sh);
-                }
-            std::lock_guard<std::mutex> lock(merge_mutex);
-            total.merge(local);
-        });
-        return total.result();
-    };
-
-    // Choose λ on the held-out frames, then measure the model exactly as it
-    // is stored (ridge, constant vertices, per-vertex joint pruning), fitted
-    // without the held-out frames, on them.
+// Chooses ρ (λ = ρ·s_max²) on the held-out frames from ridge_grid, then
+// measures the model exactly as it is stored (ridge, constant vertices,
+// per-vertex joint pruning), fitted without the held-out frames, on them.
+// Without held-out frames ρ = 1e-4. Progress 0.8 → 0.9.
+double choose_ridge(const LinearFit& fit, const Eigen::MatrixXd& A, const FitShape& shape,
+                    const std::vector<std::size_t>& train, const std::vector<std::size_t>& holdout,
+                    const Progress& progress, FitReport& report) {
     double rho = 1e-4;
-    if (!holdout.empty()) {
-        const Solver sol = make_solver(train);
-        Eigen::MatrixXd p(holdout.size(), k);
-        for (std::size_t r = 0; r < holdout.size(); ++r) p.row(r) = A.row(holdout[r]) - sol.feature_mean.transpose();
-        const Eigen::MatrixXd pv = k ? Eigen::MatrixXd(p * sol.V) : Eigen::MatrixXd(holdout.size(), 0);
-        double best = std::numeric_limits<double>::infinity();
-        const std::vector<double> grid = k ? ridge_grid() : std::vector<double>{rho};
-        for (std::size_t g = 0; g < grid.size(); ++g) {
-            Eigen::MatrixXf predicted = sol.b_mean.replicate(holdout.size(), 1);
-            if (k) predicted += (pv * shrink(sol, grid[g]).asDiagonal()).cast<float>() * sol.ut_b;
-            const Errors e = sh_errors(holdout, predicted);
-            report.ridge_curve.emplace_back(grid[g], e.sh_rms);
-            if (e.sh_rms < best) {
-                best = e.sh_rms;
-                rho = grid[g];
-                report.model_holdout_unpruned = e;
-            }
-            progress.report(0.8 + 0.05 * double(g + 1) / double(grid.size()));
+    if (holdout.empty()) return rho;
+    const std::size_t k = shape.k;
+    const RidgeSolver sol = fit.solver(train);
+    Eigen::MatrixXd p(holdout.size(), k);
+    for (std::size_t r = 0; r < holdout.size(); ++r) p.row(r) = A.row(holdout[r]) - sol.feature_mean.transpose();
+    const Eigen::MatrixXd pv = k ? Eigen::MatrixXd(p * sol.V) : Eigen::MatrixXd(holdout.size(), 0);
+    double best = std::numeric_limits<double>::infinity();
+    const std::vector<double> grid = k ? ridge_grid() : std::vector<double>{rho};
+    for (std::size_t g = 0; g < grid.size(); ++g) {
+        Eigen::MatrixXf predicted = sol.b_mean.replicate(holdout.size(), 1);
+        if (k) predicted += (pv * sol.shrink(grid[g]).asDiagonal()).cast<float>() * sol.ut_b;
+        const Errors e = fit.predicted_errors(holdout, predicted);
+        report.ridge_curve.emplace_back(grid[g], e.sh_rms);
+        if (e.sh_rms < best) {
+            best = e.sh_rms;
+            rho = grid[g];
+            report.model_holdout_unpruned = e;
         }
-        Eigen::MatrixXf W_train;
-        if (k) W_train = (sol.V * shrink(sol, rho).asDiagonal()).cast<float>() * sol.ut_b;
-        ErrorSums ignored;
-        const Pruned pruned_train = prune(train, sol, W_train, ignored, progress, 0.85, 0.9);
-        report.model_holdout = pruned_errors(pruned_train, W_train, holdout);
+        progress.report(0.8 + 0.05 * double(g + 1) / double(grid.size()));
     }
-    report.ridge_relative = rho;
+    Eigen::MatrixXf W_train;
+    if (k) W_train = sol.weights(rho);
+    ErrorSums ignored;
+    const PrunedModel pruned_train = fit.prune(train, sol, W_train, ignored, progress, 0.85, 0.9);
+    report.model_holdout = fit.pruned_errors(pruned_train, W_train, holdout);
+    return rho;
+}
 
-    // Refit on every frame: W = V·diag(s/(s²+λ))·Uᵀ·B_c (k × V·d).
-    std::vector<std::size_t> all(F);
-    std::iota(all.begin(), all.end(), std::size_t(0));
-    const Solver sol = make_solver(all);
-    Eigen::MatrixXf W;
-    if (k) W = (sol.V * shrink(sol, rho).asDiagonal()).cast<float>() * sol.ut_b;
-
-    PoseModel model;
-    ErrorSums train_errors;
-    Pruned pruned = prune(all, sol, W, train_errors, progress, 0.9, 1.0);
-    std::vector<std::vector<std::uint16_t>>& kept = pruned.kept;
+// The stored form: the kept joints' weight blocks per vertex, in vertex
+// order, and the sizes the report gives.
+void store_model(const TrainingSet& set, const FitSettings& settings, const FitShape& shape,
+                 const std::vector<std::size_t>& active, PrunedModel& pruned, const Eigen::MatrixXf& W,
+                 PoseModel& model, FitReport& report) {
+    const std::size_t V = shape.V;
+    const int d = shape.d, fpj = shape.fpj;
+    const std::vector<std::vector<std::uint16_t>>& kept = pruned.kept;
     model.bias = std::move(pruned.bias);
-    report.model_training = train_errors.result();
-
-    model.order = order;
-    model.lobes = lobes;
+    model.order = shape.order;
+    model.lobes = shape.lobes;
     model.rays = set.settings.rays;
     model.below_horizon = set.settings.below_horizon;
     model.features = settings.features;
@@ -458,16 +526,18 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
                 for (int i = 0; i < d; ++i) model.weights.push_back(W(j * fpj + a, v * d + i));
         }
     report.stored_joint_blocks = model.joint_index.size();
-    report.seconds_linear = seconds_since(t_linear);
     report.model_bytes = 4 * model.joint_offsets.size() + 2 * model.joint_index.size() + 4 * model.bias.size() +
                          4 * model.weights.size();
-    report.dense_bytes = 4 * std::size_t(d) * (k + 1) * V;
-    if (report.holdout_frames == 0) report.model_holdout = report.model_holdout_unpruned = Errors{};
+    report.dense_bytes = 4 * std::size_t(d) * (shape.k + 1) * V;
+}
 
-    model.summary = {
-        {"frames", double(F)},
+// The report's numbers, stored with the model as (name, value).
+std::vector<std::pair<std::string, double>> model_summary(const FitReport& report, std::size_t frames,
+                                                          std::size_t active_joints) {
+    return {
+        {"frames", double(frames)},
         {"holdout_frames", double(report.holdout_frames)},
-        {"active_joints", double(active.size())},
+        {"active_joints", double(active_joints)},
         {"zh_fit_sh_rms", report.zh_fit.sh_rms},
         {"zh_fit_ao_mean_abs", report.zh_fit.ao_mean_abs},
         {"training_sh_rms", report.model_training.sh_rms},
@@ -477,7 +547,7 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
         {"holdout_ao_max_abs", report.model_holdout.ao_max_abs},
         {"holdout_unpruned_sh_rms", report.model_holdout_unpruned.sh_rms},
         {"holdout_unpruned_ao_mean_abs", report.model_holdout_unpruned.ao_mean_abs},
-        {"ridge_relative", rho},
+        {"ridge_relative", report.ridge_relative},
         {"constant_vertices", double(report.constant_vertices)},
         {"stored_joint_blocks", double(report.stored_joint_blocks)},
         {"model_bytes", double(report.model_bytes)},
@@ -485,6 +555,68 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
         {"seconds_zh_fit", report.seconds_zh_fit},
         {"seconds_linear", report.seconds_linear},
     };
+}
+
+}  // namespace
+
+PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence>& influence,
+                         const FitSettings& settings, const Progress& progress, FitReport* report_out) {
+    check_fit_settings(settings);
+    check_training_set(set);
+    if (set.settings.weighting != Weighting::Plain && set.settings.weighting != Weighting::Cosine)
+        throw ArgumentError("unknown weighting");
+    if (set.frames.empty()) throw ArgumentError("the training set has no frames");
+    if (set.vertex_count == 0) throw ArgumentError("the training set has no vertices");
+    FitShape shape{};
+    shape.order = set.settings.order;
+    shape.lobes = settings.lobes;
+    shape.n_sh = shape.order * shape.order;
+    shape.d = shape.lobes * params_per_lobe(shape.order);
+    shape.fpj = features_per_joint(settings.features);
+    shape.V = set.vertex_count;
+    shape.F = set.frames.size();
+    FitReport report;
+
+    // ZH lobes per vertex and frame (fig. 2b): rows of B.
+    const auto t_zh = Clock::now();
+    ErrorSums zh_errors;
+    const Eigen::MatrixXf B = fit_frame_lobes(set, settings, shape, progress, zh_errors);
+    report.zh_fit = zh_errors.result();
+    report.seconds_zh_fit = seconds_since(t_zh);
+
+    // Active joints and the pose matrix A (without its bias column).
+    const auto t_linear = Clock::now();
+    report.joints = choose_active_joints(set, influence, settings.joint_tolerance_degrees);
+    std::vector<std::size_t> active;
+    for (std::size_t b = 0; b < report.joints.size(); ++b)
+        if (report.joints[b].active) active.push_back(b);
+    if (active.size() > 65535) throw ArgumentError("too many active joints");
+    shape.k = active.size() * shape.fpj;
+    const Eigen::MatrixXd A = pose_matrix(set, active, settings.features, shape);
+    const LinearFit fit(set, settings, shape, A, B);
+
+    // λ from the held-out frames, then the refit on every frame.
+    std::vector<std::size_t> train, holdout;
+    split_frames(shape.F, settings.holdout_stride, train, holdout);
+    report.training_frames = shape.F;
+    report.holdout_frames = holdout.size();
+    const double rho = choose_ridge(fit, A, shape, train, holdout, progress, report);
+    report.ridge_relative = rho;
+    std::vector<std::size_t> all(shape.F);
+    std::iota(all.begin(), all.end(), std::size_t(0));
+    const RidgeSolver sol = fit.solver(all);
+    Eigen::MatrixXf W;
+    if (shape.k) W = sol.weights(rho);
+
+    // Pruned, as stored.
+    PoseModel model;
+    ErrorSums train_errors;
+    PrunedModel pruned = fit.prune(all, sol, W, train_errors, progress, 0.9, 1.0);
+    report.model_training = train_errors.result();
+    store_model(set, settings, shape, active, pruned, W, model, report);
+    report.seconds_linear = seconds_since(t_linear);
+    if (report.holdout_frames == 0) report.model_holdout = report.model_holdout_unpruned = Errors{};
+    model.summary = model_summary(report, shape.F, active.size());
     if (report_out) *report_out = std::move(report);
     return model;
 }
