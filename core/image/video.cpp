@@ -1,6 +1,8 @@
 #include "image/video.hpp"
 
 #include <algorithm>
+#include <climits>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
@@ -72,6 +74,22 @@ void parse_framecrc(const std::string& text, VideoInfo& info) {
         info.frames_per_second = double(tb_den) / (double(tb_num) * double(duration));
 }
 
+// One frame of `values` floats from the decoder into `frame`. The buffer
+// grows to a whole frame only once the first 64 MiB of it have arrived, so
+// dimensions from a damaged or hostile listing cost memory only when the
+// decoder really delivers that many pixels. False when the output ends first.
+bool read_frame(ChildProcess& child, std::vector<float>& frame, std::size_t values) {
+    constexpr std::size_t first_values = (std::size_t(64) << 20) / sizeof(float);
+    std::size_t done = 0;
+    for (const std::size_t until : {std::min(values, first_values), values}) {
+        if (until <= done) continue;
+        if (frame.size() < until) frame.resize(until);
+        if (!child.read_exact(frame.data() + done, (until - done) * sizeof(float))) return false;
+        done = until;
+    }
+    return true;
+}
+
 }  // namespace
 
 bool is_video_file(const std::string& path) {
@@ -108,6 +126,11 @@ VideoInfo probe_video(const std::string& path) {
     if (info.width <= 0 || info.height <= 0 || info.frame_count <= 0)
         throw IoError("video '" + path + "' has no video frames (" + std::to_string(info.width) + "x" +
                       std::to_string(info.height) + ", " + std::to_string(info.frame_count) + " frames)");
+    // FFmpeg decodes no picture beyond (w + 128)(h + 128) < INT_MAX / 8
+    // (av_image_check_size); larger dimensions are a damaged listing.
+    if ((std::uint64_t(info.width) + 128) * (std::uint64_t(info.height) + 128) >= std::uint64_t(INT_MAX / 8))
+        throw IoError("video '" + path + "' declares " + std::to_string(info.width) + "x" +
+                      std::to_string(info.height) + " pixels, more than FFmpeg decodes; the file is damaged");
     return info;
 }
 
@@ -133,9 +156,9 @@ Image VideoReader::read(int index) {
         next_ = 0;
     }
     const std::size_t plane = std::size_t(info_.width) * info_.height;
-    std::vector<float> gbr(plane * 3);
+    std::vector<float> gbr;
     for (; next_ <= index; ++next_) {
-        if (!decoder_->child.read_exact(gbr.data(), gbr.size() * sizeof(float))) {
+        if (!read_frame(decoder_->child, gbr, plane * 3)) {
             std::unique_ptr<Decoder> ended = std::move(decoder_);
             if (ended->child.wait() != 0) fail(path_, "decode frame " + std::to_string(next_) + " of", ended->child);
             throw IoError("video '" + path_ + "' ended after " + std::to_string(next_) + " of its " +
