@@ -1,13 +1,17 @@
-// Synthetic environment maps with known integrals and irradiance.
+// Synthetic environment maps with known integrals and irradiance, and
+// random light sets.
 #pragma once
 
 #include <cmath>
 #include <numbers>
+#include <random>
+#include <vector>
 
 #include <Eigen/Core>
 
 #include "image/image.hpp"
 #include "lights/environment.hpp"
+#include "lights/lights.hpp"
 
 namespace penumbra::lights::testing {
 
@@ -41,6 +45,21 @@ inline EnvironmentMap as_map(const Image& im, Projection p = Projection::equirec
     o.projection = p;
     o.max_width = 0;
     return make_environment(im, o);
+}
+
+// n lights in uniformly random directions with powers in [0.1, 2), grey.
+inline std::vector<Light> random_lights(int n, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> g(0.0, 1.0);
+    std::uniform_real_distribution<double> p(0.1, 2.0);
+    std::vector<Light> lights(n);
+    for (int i = 0; i < n; ++i) {
+        lights[i].index = i;
+        lights[i].direction = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+        lights[i].power = p(rng);
+        lights[i].rgb = Eigen::Vector3d::Constant(lights[i].power);
+    }
+    return lights;
 }
 
 }  // namespace penumbra::lights::testing

@@ -1,6 +1,7 @@
-// Ray casting and per-frame visibility, checked against a brute-force ray
-// tracer written here (Möller–Trumbore over every triangle, no Embree) and
-// against closed forms (a lone convex sphere sees exactly its upper hemisphere).
+// Ray casting and per-frame visibility (visibility/visibility_bake.hpp),
+// checked against a brute-force ray tracer written here (Möller–Trumbore over
+// every triangle, no Embree) and against closed forms (a lone convex sphere
+// sees exactly its upper hemisphere); merging a farm's training-set pieces.
 #include <cmath>
 #include <numbers>
 
@@ -22,6 +23,7 @@ namespace {
 
 using testing::TestMesh;
 using testing::add_sphere;
+using testing::synthetic_set;
 
 bool brute_force_occluded(const TriangleMesh& mesh, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
@@ -297,34 +299,22 @@ TEST(VisibilityBake, cancel_from_progress_throws_cancelled) {
     EXPECT_THROW(bake_frame(geometry_of(m), neighbours, s, vis.data(), stop), Cancelled);
 }
 
-TEST(VisibilityFrames, tangent_follows_the_reference_edge_and_frames_are_orthonormal) {
-    TestMesh m;
-    add_sphere(m, Eigen::Vector3d::Zero(), 1.0);
-    const auto neighbours = reference_neighbours(m.mesh.vertex_count(), {}, m.mesh.triangles);
-    std::vector<float> frames(9 * m.mesh.vertex_count());
-    vertex_frames(m.mesh.positions, m.normals, m.mesh.triangles, neighbours, frames.data());
-    for (std::size_t v = 0; v < m.mesh.vertex_count(); ++v) {
-        Eigen::Matrix3d f;
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) f(i, j) = frames[9 * v + 3 * i + j];
-        EXPECT_LT((f * f.transpose() - Eigen::Matrix3d::Identity()).norm(), 1e-5);
-        EXPECT_NEAR(f.determinant(), 1.0, 1e-5);
-        const Eigen::Vector3d edge(m.mesh.positions[3 * neighbours[v]] - m.mesh.positions[3 * v],
-                                   m.mesh.positions[3 * neighbours[v] + 1] - m.mesh.positions[3 * v + 1],
-                                   m.mesh.positions[3 * neighbours[v] + 2] - m.mesh.positions[3 * v + 2]);
-        EXPECT_GT(f.row(0).dot(edge), 0.0);
-        EXPECT_NEAR(f.row(1).dot(edge), 0.0, 1e-5);
-    }
-}
-
-TEST(VisibilityFrames, neighbours_come_from_polygons_not_their_triangulation) {
-    // One quad 0-1-2-3: vertex 0's neighbour is 1 whichever diagonal splits it.
-    const auto n = reference_neighbours(4, {4}, {0, 1, 2, 3});
-    EXPECT_EQ(n[0], 1u);
-    EXPECT_EQ(n[3], 0u);
-    EXPECT_THROW(reference_neighbours(4, {3}, {0, 1, 2, 3}), ArgumentError);
-    EXPECT_NE(topology_hash(4, {4}, {0, 1, 2, 3}), topology_hash(4, {4}, {0, 1, 3, 2}));
-    EXPECT_EQ(topology_hash(4, {4}, {0, 1, 2, 3}), topology_hash(4, {4}, {0, 1, 2, 3}));
+TEST(VisibilityBake, merging_pieces_sorts_frames_and_rejects_foreign_pieces) {
+    TrainingSet a = synthetic_set({0.0, 0.1}, 4), b = synthetic_set({0.2, 0.3}, 4);
+    for (auto& f : a.frames) f.frame += 10;
+    const TrainingSet merged = merge_training_sets({a, b});
+    ASSERT_EQ(merged.frames.size(), 4u);
+    EXPECT_EQ(merged.frames[0].frame, 0.0);
+    EXPECT_EQ(merged.frames[3].frame, 11.0);
+    TrainingSet other = b;
+    other.topology_hash = 7;
+    EXPECT_THROW(merge_training_sets({a, other}), ArgumentError);
+    other = b;
+    other.bone_names = {"leg"};
+    EXPECT_THROW(merge_training_sets({a, other}), ArgumentError);
+    other = b;
+    other.settings.rays = 128;
+    EXPECT_THROW(merge_training_sets({a, other}), ArgumentError);
 }
 
 }  // namespace

@@ -1,31 +1,17 @@
+// Greedy light clustering (lights/clustering.hpp): the paper's radius, power
+// conservation, and the same clusters as a brute-force pass.
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <numbers>
-#include <random>
 
 #include "common/error.hpp"
-#include "lights/angular_regions.hpp"
 #include "lights/clustering.hpp"
+#include "lights_test_util.hpp"
 
 namespace penumbra::lights {
 namespace {
 
-constexpr double pi = std::numbers::pi;
-
-std::vector<Light> random_lights(int n, unsigned seed) {
-    std::mt19937 rng(seed);
-    std::normal_distribution<double> g(0.0, 1.0);
-    std::uniform_real_distribution<double> p(0.1, 2.0);
-    std::vector<Light> lights(n);
-    for (int i = 0; i < n; ++i) {
-        lights[i].index = i;
-        lights[i].direction = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
-        lights[i].power = p(rng);
-        lights[i].rgb = Eigen::Vector3d::Constant(lights[i].power);
-    }
-    return lights;
-}
+using testing::random_lights;
 
 TEST(LightsClustering, radius_follows_the_papers_formula) {
     ClusterOptions o;
@@ -68,26 +54,6 @@ TEST(LightsClustering, greedy_clusters_are_bounded_conserve_power_and_match_brut
             EXPECT_EQ(c.clusters[k].index, lowest);
         }
     }
-}
-
-TEST(LightsAngularRegions, culled_irradiance_equals_brute_force_with_fewer_visits) {
-    const auto lights = random_lights(300, 2);
-    std::vector<Eigen::Vector3d> dirs;
-    for (const auto& l : lights) dirs.push_back(l.direction);
-    const AngularRegionTable table(dirs, 6);
-    EXPECT_EQ(table.region_count(), 216);
-    for (int r = 0; r < table.region_count(); ++r) EXPECT_EQ(table.region_of(table.centre(r)), r);
-    std::mt19937 rng(3);
-    std::normal_distribution<double> g(0.0, 1.0);
-    std::vector<Eigen::Vector3d> normals(1000);
-    for (auto& n : normals) n = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
-    std::size_t visits = 0;
-    const Eigen::MatrixXd a = irradiance_culled(table, lights, normals, &visits);
-    const Eigen::MatrixXd b = irradiance(lights, normals);
-    EXPECT_LT((a - b).cwiseAbs().maxCoeff(), 1e-12);
-    const double ratio = double(visits) / (normals.size() * lights.size());
-    EXPECT_LT(ratio, 0.75);
-    EXPECT_GT(ratio, 0.5);
 }
 
 }  // namespace
