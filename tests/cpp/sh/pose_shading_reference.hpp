@@ -2,8 +2,9 @@
 // with (to 1e-10): per vertex, build the frame G (z = n or r), expand the lobes
 // in G with zh_to_sh_accumulate, apply T with ZonalOperator::apply, and rotate
 // the RGB lighting into G with a full Ivanic–Ruedenberg ShRotation(Gᵀ) — the
-// per-vertex rotation the fast path avoids. Also used by the benchmark
-// (bench/cpp/pose_shading_bench.cpp) as the "reference" row.
+// per-vertex rotation the fast path avoids. The benchmark times its own copy
+// of the diffuse and Phong path (bench/cpp/pose_shading_bench.cpp,
+// shade_straightforward) as the "reference" rows.
 #pragma once
 
 #include <algorithm>
