@@ -1,6 +1,6 @@
 // How an environment image maps to directions in Blender world coordinates
-// (+z up), for every input the light-rig tool accepts. Directions always
-// point FROM the scene TOWARDS the light, as in core/sh.
+// (common/latlong.hpp: +z up, pointing FROM the scene TOWARDS the light, as
+// in core/sh), for every input the light-rig tool accepts.
 //
 // Projections (continuous pixel coordinates: x to the right, y down, pixel
 // (column c, row r) covers [c, c+1) × [r, r+1), row 0 = top row of the file)

@@ -10,7 +10,7 @@
 namespace penumbra::sh {
 
 struct PointSet {
-    std::vector<Eigen::Vector3d> directions;  // unit vectors, +z up
+    std::vector<Eigen::Vector3d> directions;  // unit vectors, world axes (common/latlong.hpp)
     std::vector<double> weights;              // solid angle per point; sums to 4π
 };
 

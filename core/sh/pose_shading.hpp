@@ -8,7 +8,7 @@
 // Conventions (the visibility baker writes what this reads)
 // ---------------------------------------------------------
 // * SH: sh/basis.hpp. Lighting is (order², 3) RGB coefficients of the world
-//   radiance (Blender world axes, +z up), e.g. from project_equirectangular.
+//   radiance (world axes of common/latlong.hpp), e.g. from project_equirectangular.
 // * A vertex's local frame is (t, b, n): n = normalize(normal),
 //   t = normalize(tangent − (tangent·n) n) (Gram–Schmidt, so the tangent need
 //   not be exactly orthogonal), b = n × t. Local coordinates (x, y, z) mean
