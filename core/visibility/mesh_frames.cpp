@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "common/error.hpp"
+#include "common/hash.hpp"
 #include "common/parallel.hpp"
 
 namespace penumbra::visibility {
@@ -181,15 +182,6 @@ MeshDiagnostics mesh_diagnostics(const std::vector<float>& positions, const std:
     d.normals_point_inward = (box_volume > 0.0 && d.signed_volume < -1e-3 * box_volume) ||
                              d.inward_normal_fraction > 0.5;
     return d;
-}
-
-std::uint64_t fnv1a64(const void* data, std::size_t size, std::uint64_t hash) {
-    const auto* bytes = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < size; ++i) {
-        hash ^= bytes[i];
-        hash *= 0x100000001b3ull;
-    }
-    return hash;
 }
 
 std::uint64_t topology_hash(std::size_t vertex_count, const std::vector<std::uint32_t>& polygon_sizes,

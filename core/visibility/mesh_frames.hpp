@@ -17,6 +17,8 @@
 
 #include <Eigen/Core>
 
+#include "common/hash.hpp"
+
 namespace penumbra::visibility {
 
 // Reference neighbour of each vertex from the polygons (sizes and the
@@ -62,13 +64,10 @@ struct MeshDiagnostics {
 MeshDiagnostics mesh_diagnostics(const std::vector<float>& positions, const std::vector<float>& normals,
                                  const std::vector<std::uint32_t>& triangles);
 
-// FNV-1a 64 fingerprint of a mesh's topology: vertex count, then each
+// FNV-1a 64 (common/hash.hpp) fingerprint of a mesh's topology: vertex count, then each
 // polygon's size and vertex indices (Blender's polygons, not its triangles,
 // whose split of a quad can change as the quad bends).
 std::uint64_t topology_hash(std::size_t vertex_count, const std::vector<std::uint32_t>& polygon_sizes,
                             const std::vector<std::uint32_t>& polygon_vertices);
-
-// FNV-1a 64 over bytes, continuing from `hash`.
-std::uint64_t fnv1a64(const void* data, std::size_t size, std::uint64_t hash = 0xcbf29ce484222325ull);
 
 }  // namespace penumbra::visibility

@@ -1,93 +1,21 @@
 #include "visibility/model_file.hpp"
 
-#include <bit>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 
+#include "common/binary_io.hpp"
 #include "common/error.hpp"
+#include "common/hash.hpp"
 #include "image/atomic_file.hpp"
-#include "visibility/mesh_frames.hpp"
 
 namespace penumbra::visibility {
-
-static_assert(std::endian::native == std::endian::little, "model files are little-endian");
 
 namespace {
 
 constexpr char model_magic[9] = "PNMBRZHM";
 constexpr char training_magic[9] = "PNMBRVIS";
 constexpr std::size_t header_bytes = 32;
-constexpr std::uint32_t max_name_bytes = 4096;
-
-class Writer {
-public:
-    template <typename T> void put(T value) { append(&value, sizeof value); }
-    void put_string(const std::string& s) {
-        if (s.size() > max_name_bytes) throw ArgumentError("name longer than 4096 bytes: " + s.substr(0, 64) + "...");
-        put(std::uint32_t(s.size()));
-        append(s.data(), s.size());
-    }
-    void put_strings(const std::vector<std::string>& names) {
-        put(std::uint32_t(names.size()));
-        for (const auto& n : names) put_string(n);
-    }
-    template <typename T> void put_array(const std::vector<T>& a) { append(a.data(), a.size() * sizeof(T)); }
-    const std::string& bytes() const { return bytes_; }
-
-private:
-    void append(const void* p, std::size_t n) { bytes_.append(static_cast<const char*>(p), n); }
-    std::string bytes_;
-};
-
-class Reader {
-public:
-    Reader(const std::string& path, const char* data, std::size_t size) : path_(path), data_(data), size_(size) {}
-    template <typename T> T get() {
-        need(sizeof(T), "a field");
-        T value;
-        std::memcpy(&value, data_ + at_, sizeof(T));
-        at_ += sizeof(T);
-        return value;
-    }
-    std::string get_string() {
-        const auto n = get<std::uint32_t>();
-        if (n > max_name_bytes) fail("a name is longer than 4096 bytes");
-        need(n, "a name");
-        std::string s(data_ + at_, n);
-        at_ += n;
-        return s;
-    }
-    std::vector<std::string> get_strings(std::uint32_t limit) {
-        const auto n = get<std::uint32_t>();
-        if (n > limit) fail("too many names (" + std::to_string(n) + ")");
-        std::vector<std::string> out;
-        for (std::uint32_t i = 0; i < n; ++i) out.push_back(get_string());
-        return out;
-    }
-    template <typename T> std::vector<T> get_array(std::uint64_t count, const char* what) {
-        if (count > (size_ - at_) / sizeof(T)) fail(std::string("it ends inside ") + what);
-        std::vector<T> out(count);
-        if (count) std::memcpy(out.data(), data_ + at_, count * sizeof(T));  // never memcpy from/to null
-        at_ += count * sizeof(T);
-        return out;
-    }
-    void expect_end() {
-        if (at_ != size_) fail("it has " + std::to_string(size_ - at_) + " unexpected bytes at the end");
-    }
-    [[noreturn]] void fail(const std::string& why) const {
-        throw IoError("'" + path_ + "' is not a valid Penumbra visibility file: " + why);
-    }
-
-private:
-    void need(std::size_t n, const char* what) {
-        if (n > size_ - at_) fail(std::string("it ends inside ") + what + " (truncated?)");
-    }
-    std::string path_;
-    const char* data_;
-    std::size_t size_;
-    std::size_t at_ = 0;
-};
 
 void write_file(const std::string& path, const char* magic, const std::string& payload) {
     std::string header(header_bytes, '\0');
@@ -146,7 +74,7 @@ std::string read_payload(const std::string& path, const char* magic, const char*
 
 void write_pose_model(const std::string& path, const PoseModel& model) {
     check_pose_model(model);
-    Writer w;
+    BinaryWriter w;
     w.put(std::uint32_t(model.order));
     w.put(std::uint32_t(model.lobes));
     w.put(std::uint32_t(model.rays));
@@ -171,7 +99,7 @@ void write_pose_model(const std::string& path, const PoseModel& model) {
 
 PoseModel read_pose_model(const std::string& path) {
     const std::string payload = read_payload(path, model_magic, "Penumbra pose model");
-    Reader r(path, payload.data(), payload.size());
+    BinaryReader r(path, "Penumbra visibility file", payload.data(), payload.size());
     PoseModel m;
     m.order = int(r.get<std::uint32_t>());
     m.lobes = int(r.get<std::uint32_t>());
@@ -210,7 +138,7 @@ PoseModel read_pose_model(const std::string& path) {
 
 void write_training_set(const std::string& path, const TrainingSet& set) {
     check_training_set(set);
-    Writer w;
+    BinaryWriter w;
     w.put(std::uint32_t(set.settings.order));
     w.put(std::uint32_t(set.settings.rays));
     w.put(std::uint32_t(set.settings.below_horizon));
@@ -230,7 +158,7 @@ void write_training_set(const std::string& path, const TrainingSet& set) {
 
 TrainingSet read_training_set(const std::string& path) {
     const std::string payload = read_payload(path, training_magic, "Penumbra visibility training set");
-    Reader r(path, payload.data(), payload.size());
+    BinaryReader r(path, "Penumbra visibility file", payload.data(), payload.size());
     TrainingSet s;
     s.settings.order = int(r.get<std::uint32_t>());
     s.settings.rays = int(r.get<std::uint32_t>());
