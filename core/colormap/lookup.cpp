@@ -147,8 +147,10 @@ void LookupSpec::validate() const {
     if (!std::isfinite(sigma_max))
         throw ArgumentError("sigma_max must be a finite number > 0 (the widest filter the table holds)");
     check_range("sigma_max (the widest filter the table holds)", sigma_max, sigma_max_range);
-    if (!std::isfinite(mean_min) || !std::isfinite(mean_max) || !(mean_max > mean_min))
-        throw ArgumentError("the mean range must be finite with mean_min < mean_max");
+    // The width too: mean_min −1e308, mean_max 1e308 would fill the table with NaN.
+    if (!std::isfinite(mean_min) || !std::isfinite(mean_max) || !(mean_max > mean_min) ||
+        !std::isfinite(mean_max - mean_min))
+        throw ArgumentError("the mean range must be finite with mean_min < mean_max, and its width finite");
 }
 
 double LookupSpec::mean_of_column(double x) const { return mean_min + (mean_max - mean_min) * x / (width - 1); }
@@ -169,6 +171,12 @@ Image build_lookup(const ColorMap& map, const LookupSpec& spec, const Progress& 
     spec.validate();
     if (map.knot_count() < 1 || map.channels < 1)
         throw ArgumentError("the colour map is empty");
+    // The table is float32: a colour beyond its range would become Inf there.
+    for (int k = 0; k < map.knot_count(); ++k)
+        for (int c = 0; c < map.channels; ++c)
+            if (!(std::fabs(map.color(k)[c]) <= std::numeric_limits<float>::max()))
+                throw ArgumentError("the colour map has a value (" + std::to_string(map.color(k)[c]) +
+                                    ") beyond float32's range, which the lookup image stores");
     Image table(spec.width, spec.height, map.channels);
     // A row per block: a few milliseconds even for wide tables, so cancel is prompt.
     parallel_for(std::size_t(spec.height), {threads, 1, "colormap.lookup"}, [&](std::size_t begin, std::size_t end) {
@@ -186,6 +194,9 @@ Image build_lookup(const ColorMap& map, const LookupSpec& spec, const Progress& 
 }
 
 void bilinear_lookup(const Image& table, const LookupSpec& spec, double mean, double sigma, double* out) {
+    // A NaN survives std::clamp, and its cast to int reads outside the table.
+    if (std::isnan(mean) || std::isnan(sigma))
+        throw ArgumentError("a lookup needs a mean and a sigma that are numbers, not NaN");
     const double fx = std::clamp(spec.column_of_mean(mean), 0.0, static_cast<double>(table.width - 1));
     const double fy = std::clamp(spec.row_of_sigma(sigma), 0.0, static_cast<double>(table.height - 1));
     const int x0 = std::min(static_cast<int>(fx), table.width - 2);

@@ -44,7 +44,7 @@ struct LookupSpec {
     SigmaSpacing sigma_spacing = SigmaSpacing::linear;
 
     // Throws ArgumentError: width < 2, height < 2, sigma_max not finite or
-    // <= 0, mean range empty or not finite.
+    // <= 0, mean range empty or not finite (its width included).
     void validate() const;
     double mean_of_column(double x) const;  // fractional columns allowed
     double sigma_of_row(double y) const;
@@ -58,7 +58,8 @@ struct LookupSpec {
 Image build_lookup(const ColorMap& map, const LookupSpec& spec, const Progress& progress = {}, int threads = 0);
 
 // What a texture unit returns: bilinear interpolation of `table` between
-// texel centres, (mean, σ) clamped to the table's ranges (EXTEND).
+// texel centres, (mean, σ) clamped to the table's ranges (EXTEND). A NaN
+// mean or σ is an ArgumentError.
 void bilinear_lookup(const Image& table, const LookupSpec& spec, double mean, double sigma, double* out);
 
 struct LookupAccuracy {

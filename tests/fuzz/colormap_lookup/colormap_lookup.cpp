@@ -60,7 +60,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::vector<double> out(table.channels);
         for (int probe = 0; probe < 4; ++probe) {
             const double mean = in.take<double>(), sigma = in.take<double>();
-            if (fuzz::pending_nan_probe(mean, sigma) || fuzz::pending_overflowing_range(spec)) continue;
             bilinear_lookup(table, spec, mean, sigma, out.data());
             if (!finite) continue;
             for (double v : out)
