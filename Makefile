@@ -63,9 +63,10 @@ PY_ASAN_ENV := LD_PRELOAD="$$(g++ -print-file-name=libasan.so) $$(g++ -print-fil
   PENUMBRA_ADDON_DIR=$(abspath $(ASAN_BUILD))/addon/penumbra
 # Left out of the Python run under ASan, and why (each runs in test-python):
 #   test_package.py: checks the zips in dist/, built from the Release build;
+#   test_gpu_preview_in_blender.py: runs Blenders, which load the Release add-on;
 #   test_only_the_module_init_symbol_is_exported: wants all three modules,
 #     the sanitizer build makes the 3.11 one only.
-PY_ASAN_SKIP := --ignore=tests/python/test_package.py \
+PY_ASAN_SKIP := --ignore=tests/python/test_package.py --ignore=tests/python/test_gpu_preview_in_blender.py \
   --deselect tests/python/test_module.py::test_only_the_module_init_symbol_is_exported
 
 $(ASAN_BUILD)/CMakeCache.txt:

@@ -57,11 +57,11 @@ def maps():
     out = {}
     for name, interp in (("ramp LINEAR (4 stops, exact)", "LINEAR"), ("ramp CONSTANT (4 stops, exact)", "CONSTANT"),
                          ("ramp B_SPLINE (1024 samples)", "B_SPLINE")):
-        k = pen.color_ramp_to_knots(stops, interp, "RGB", "NEAR", sampling="exact", channels=3)
+        k = pen.colormap.ramp_to_knots(stops, interp, "RGB", "NEAR", sampling="exact", channels=3)
         out[name] = (k["positions"], k["colors"], k["interpolation"], k["max_sampling_error"])
-    k = pen.color_ramp_to_knots(stops, "LINEAR", "RGB", "NEAR", sampling="cycles", channels=3)
+    k = pen.colormap.ramp_to_knots(stops, "LINEAR", "RGB", "NEAR", sampling="cycles", channels=3)
     out["ramp as Cycles renders (256 entries)"] = (k["positions"], k["colors"], k["interpolation"], 0.0)
-    out["random 256 samples"] = (np.linspace(0, 1, 256), rng.random((256, 3)), "linear", 0.0)
+    out["random 256 samples"] = (np.linspace(0, 1, 256), rng.random((256, 3)), pen.colormap.MapInterpolation.LINEAR, 0.0)
     return out
 
 
@@ -70,15 +70,15 @@ def bench_build():
            "| colour map | knots | exact (s) | sampled sum, 2001 taps (s) | speed-up | max |exact − sampled| | ramp sampling error |",
            "|---|---|---|---|---|---|---|"]
     for name, (p, c, interp, sampling_error) in maps().items():
-        t_exact, lut = timed(lambda: pen.colormap_lut_knots(p, c, interp, 256, 256, 0.25, -0.25, 1.25))
-        if interp == "linear":
+        t_exact, lut = timed(lambda: pen.colormap.lut_knots(p, c, interp, 256, 256, 0.25, -0.25, 1.25))
+        if interp == pen.colormap.MapInterpolation.LINEAR:
             t_brute, ref = timed(lambda: brute_force_lut(p, c, 256, 256, 0.25, -0.25, 1.25), repeat=1)
             diff = float(abs(ref - lut)[1:].max())
             out.append(f"| {name} | {len(p)} | {t_exact:.3f} | {t_brute:.2f} | {t_brute / t_exact:.0f}× | {diff:.1e} | {sampling_error:.1e} |")
         else:
             out.append(f"| {name} | {len(p)} | {t_exact:.3f} | – | – | – | {sampling_error:.1e} |")
     rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    lut = pen.colormap_lut(np.random.default_rng(1).random((256, 3)).astype(np.float32), 256, 256, 0.25, 0, 1)
+    lut = pen.colormap.lut(np.random.default_rng(1).random((256, 3)).astype(np.float32), 256, 256, 0.25, 0, 1)
     out += ["", f"Memory: the table itself is {lut.nbytes / 1024:.0f} KiB as float32 RGB "
             f"({lut.nbytes * 2 // 4 // 1024} KiB as half, 192 KiB as 8-bit RGB like the paper); peak RSS grew by "
             f"{max(0, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss_before)} KiB building it "
@@ -88,14 +88,14 @@ def bench_build():
 
 def bench_accuracy():
     out = ["## Bilinear lookup error against the exact value", "",
-           "RMS / max over 300 × 300 probes between texels (`colormap_lut_accuracy`), σ_max 0.25, means [−0.25, 1.25].", "",
+           "RMS / max over 300 × 300 probes between texels (`colormap.lut_accuracy`), σ_max 0.25, means [−0.25, 1.25].", "",
            "| colour map | size | linear σ rows: RMS | max | quadratic σ rows: RMS | max |", "|---|---|---|---|---|---|"]
     for name, (p, c, interp, _) in maps().items():
         for size in (64, 256, 1024):
             row = [name, f"{size}²"]
             for spacing in ("linear", "quadratic"):
-                lut = pen.colormap_lut_knots(p, c, interp, size, size, 0.25, -0.25, 1.25, sigma_spacing=spacing)
-                a = pen.colormap_lut_accuracy(p, c, interp, lut, 0.25, -0.25, 1.25, spacing, 300)
+                lut = pen.colormap.lut_knots(p, c, interp, size, size, 0.25, -0.25, 1.25, sigma_spacing=spacing)
+                a = pen.colormap.lut_accuracy(p, c, interp, lut, 0.25, -0.25, 1.25, spacing, 300)
                 row += [f"{a['rms_error']:.1e}", f"{a['max_abs_error']:.1e}"]
             out.append("| " + " | ".join(row) + " |")
     out += ["", "The largest errors sit at σ ≈ 0 on the map's sharp features, where no table resolves "
@@ -109,8 +109,8 @@ def bench_height():
            "| Λ(ω_o)+Λ(ω_i) | exact μ_d/σ_h | fit μ_d/σ_h | error | exact σ_d/σ_h | fit σ_d/σ_h | error |",
            "|---|---|---|---|---|---|---|"]
     for lam in (0.01, 0.05, 0.1, 0.3, 1, 3, 10, 100, 1e4):
-        em, es = pen.effective_height(lam, "exact")
-        fm, fs = pen.effective_height(lam, "fit")
+        em, es = pen.colormap.effective_height(lam, "exact")
+        fm, fs = pen.colormap.effective_height(lam, "fit")
         out.append(f"| {lam:g} | {em:.4f} | {fm:.4f} | {100 * (fm - em) / em:+.0f}% | {es:.4f} | {fs:.4f} | "
                    f"{100 * (fs - es) / es:+.1f}% |")
     out += ["", "The fit's mean is off by tens of percent for small Λ (it overshoots by 50–90 % below Λ = 0.1) and "
@@ -119,8 +119,8 @@ def bench_height():
             "Σ = [[0.16, 0.05], [0.05, 0.04]], s̄ = (0.05, −0.1), φ_o = 1.1; brute force: 801² grid over the normal itself.", "",
             "| θ_o | mean (closed form) | mean (numerical) | cov (closed form) | cov (numerical) |", "|---|---|---|---|---|"]
     for deg in (0, 45, 70, 85, 90):
-        g = pen.slope_filtering(math.radians(deg), 1.1, [0.05, -0.1], [0.16, 0.05, 0.04])
-        n = pen.slope_filtering(math.radians(deg), 1.1, [0.05, -0.1], [0.16, 0.05, 0.04], method="numerical")
+        g = pen.colormap.slope_filtering(math.radians(deg), 1.1, [0.05, -0.1], [0.16, 0.05, 0.04])
+        n = pen.colormap.slope_filtering(math.radians(deg), 1.1, [0.05, -0.1], [0.16, 0.05, 0.04], method="numerical")
         fmt = lambda v: "(" + ", ".join(f"{x:.4f}" for x in v) + ")"  # noqa: E731
         out.append(f"| {deg}° | {fmt(g[0])} | {fmt(n[0])} | {fmt(g[1])} | {fmt(n[1])} |")
     out.append("")
@@ -169,9 +169,10 @@ def bench_render():
             f"({best['penumbra']['rmse']:.4f} vs {plain[16]:.4f}).", "", NOTE, ""]
     os.makedirs(os.path.join(DOCS, "colormap"), exist_ok=True)
     for name in ["ground_truth"] + [f"{m}_{s}spp" for m in ("plain", "mean", "penumbra") for s in (1, 16)]:
-        image = pen.read_image(os.path.join(folder, name + ".exr"))
+        image = pen.image.read(os.path.join(folder, name + ".exr"))
         srgb = np.where(image <= 0.0031308, 12.92 * image, 1.055 * np.power(np.clip(image, 0, None), 1 / 2.4) - 0.055)
-        pen.write_png16(os.path.join(DOCS, "colormap", name + ".png"), np.clip(srgb, 0, 1).astype(np.float32), "sRGB")
+        pen.image.write_png16(os.path.join(DOCS, "colormap", name + ".png"), np.clip(srgb, 0, 1).astype(np.float32),
+                              "sRGB")
     out += ["Pictures (sRGB): " + ", ".join(f"[{n}](colormap/{n}.png)" for n in
                                             ["ground_truth", "plain_1spp", "penumbra_1spp", "mean_1spp",
                                              "plain_16spp", "penumbra_16spp"]), ""]

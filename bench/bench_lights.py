@@ -105,13 +105,13 @@ def accuracy(maps, normals):
                 if kind is None:
                     d, rgb = median_cut(image, n)
                 elif kind == "cluster":
-                    lights = _penumbra.light_rig_lights(image, count=min(4 * n, 4096), max_width=0)
-                    c = _penumbra.light_rig_cluster(lights["directions"], lights["rgb"], max_clusters=n)
+                    lights = _penumbra.lights.frame_lights(image, count=min(4 * n, 4096), max_width=0)
+                    c = _penumbra.lights.cluster(lights["directions"], lights["rgb"], max_clusters=n)
                     d, rgb = c["directions"], c["rgb"]
                 else:
-                    lights = _penumbra.light_rig_lights(image, count=n, max_width=0, **kind)
+                    lights = _penumbra.lights.frame_lights(image, count=n, max_width=0, **kind)
                     d, rgb = lights["directions"], lights["rgb"]
-                logs.append(math.log(rel_rmse(_penumbra.light_rig_irradiance(d, rgb, normals), ref)))
+                logs.append(math.log(rel_rmse(_penumbra.lights.irradiance(d, rgb, normals), ref)))
             table[name][n] = math.exp(np.mean(logs))
         print(f"  {name}: " + ", ".join(f"N={n} {100 * table[name][n]:.2f}%" for n in COUNTS), flush=True)
     return table
@@ -124,16 +124,16 @@ def flicker_of(sequence, normals, rig_kind, fps):
         rng = np.random.default_rng(7)
         es = []
         for f in sequence:
-            l = _penumbra.light_rig_lights(f, count=n, shift=tuple(rng.random(2)))
-            es.append(_penumbra.light_rig_irradiance(l["directions"], l["rgb"], normals))
+            l = _penumbra.lights.frame_lights(f, count=n, shift=tuple(rng.random(2)))
+            es.append(_penumbra.lights.irradiance(l["directions"], l["rgb"], normals))
     elif rig_kind == "reference":
-        es = [_penumbra.light_rig_exact_irradiance(f, normals) for f in sequence]
+        es = [_penumbra.lights.exact_irradiance(f, normals) for f in sequence]
     else:
-        b = _penumbra.LightRigBuilder(count=n, temporal_filter=(rig_kind == "filtered"), frames_per_second=fps)
+        b = _penumbra.lights.RigBuilder(count=n, temporal_filter=(rig_kind == "filtered"), frames_per_second=fps)
         for f in sequence:
             b.add_frame(f)
         rig = b.finish()
-        es = [_penumbra.light_rig_irradiance(rig["directions"][t], rig["rgb"][t], normals)
+        es = [_penumbra.lights.irradiance(rig["directions"][t], rig["rgb"][t], normals)
               for t in range(len(sequence))]
     changes = []
     for a, b in zip(es, es[1:]):
@@ -184,7 +184,7 @@ try:
         scene.cycles.seed = seed
         scene.render.filepath = os.path.join(out, name)
         bpy.ops.render.render(write_still=True)
-        return core.read_image(scene.render.filepath + ".exr")
+        return core.image.read(scene.render.filepath + ".exr")
 
     world_a = render("world_a", 1)
     world_b = render("world_b", 2)
@@ -239,11 +239,11 @@ def main():
     started = time.time()
     shadows = shadowed_comparison()
     print("shadowed comparison:", shadows, flush=True)
-    normals = _penumbra.fibonacci_directions(1000)
+    normals = _penumbra.sh.fibonacci_directions(1000)
     maps = []
     for name in data.WORLDS:
         image = np.maximum(data.load_world(name), 0)  # 1024x512; negatives clamped as the tool does
-        maps.append((image, _penumbra.light_rig_exact_irradiance(image, normals)))
+        maps.append((image, _penumbra.lights.exact_irradiance(image, normals)))
     print("accuracy (geometric mean over 8 bundled HDRIs):", flush=True)
     table = accuracy(maps, normals)
 
@@ -257,7 +257,7 @@ def main():
         "100 Hz lamp flicker at 22 fps (aliased to 10 Hz) + 2% noise":
             (data.noisy(data.flicker_frames(forest, 40, 22.0, 0.2), 0.02), 22.0),
     }
-    fnormals = _penumbra.fibonacci_directions(200)
+    fnormals = _penumbra.sh.fibonacci_directions(200)
     flicker = {}
     for name, (seq, fps) in sequences.items():
         flicker[name] = {k: flicker_of(seq, fnormals, k, fps)

@@ -103,7 +103,7 @@ def model_sh(model, unseen, joints_index):
     for i in range(len(unseen)):
         rotations = unseen.bone_rotations(i)[joints_index]
         _, _, params = model.synthesize(rotations)
-        out.append(native.module.zh_params_to_sh(params.astype(np.float64)))
+        out.append(native.module.visibility.zh_params_to_sh(params.astype(np.float64)))
     return np.stack(out)
 
 
@@ -239,10 +239,10 @@ def main():
     # The C++ bake alone on the same rest-pose mesh, frame after frame with
     # nothing in between (no posing, no Python): its rays/s against raw Embree.
     sizes, loops = scene_data.polygon_topology(obj.data)
-    nb = core.visibility_reference_neighbours(len(obj.data.vertices), sizes, loops)
+    nb = core.visibility.reference_neighbours(len(obj.data.vertices), sizes, loops)
     static = {}
     for rays in (128, 512):
-        ts = core.VisibilityTrainingSet(len(obj.data.vertices), 0, ["a"], rays=rays)
+        ts = core.visibility.TrainingSet(len(obj.data.vertices), 0, ["a"], rays=rays)
         started = time.perf_counter()
         for k in range(4):
             stats = ts.bake_frame(k, frame.positions, frame.normals, frame.triangles, nb, np.eye(3)[None])
@@ -295,7 +295,7 @@ def main():
             f"{cast / trace_seconds / 1e6:.2f} M rays/s in the C++ bake")
         for lobes in (LOBES if rays == 256 or (QUICK and rays == RAYS[-1]) else [2]):
             started = time.perf_counter()
-            model, report = core.fit_visibility_model(train, influence, lobes=lobes)
+            model, report = core.visibility.fit_model(train, influence, lobes=lobes)
             fit_seconds = time.perf_counter() - started
             unseen_errors = model.evaluate(unseen)
             per_frame = per_frame_errors(model, unseen)
@@ -323,9 +323,9 @@ def main():
     results["lobe_rays"] = 256 if not QUICK else RAYS[-1]
     # The direction set's own error: AO of each ray count against the largest.
     top = truth_sh(bakes[RAYS[-1]][1])
-    top_ao = np.stack([core.visibility_ambient_occlusion(f) for f in top])
+    top_ao = np.stack([core.visibility.ambient_occlusion(f) for f in top])
     results["ray_noise_ao"] = {
-        r: float(np.abs(np.stack([core.visibility_ambient_occlusion(f) for f in truth_sh(bakes[r][1])]) - top_ao).mean())
+        r: float(np.abs(np.stack([core.visibility.ambient_occlusion(f) for f in truth_sh(bakes[r][1])]) - top_ao).mean())
         for r in RAYS}
 
     # Paper fig. 3: fit plain visibility then convolve, vs fit cosine-weighted visibility.
@@ -333,11 +333,11 @@ def main():
     train_plain, unseen_plain = bakes[fig_rays]
     train_cos = bake_weighted(obj, TRAIN, fig_rays, "cosine")
     unseen_cos = bake_weighted(obj, UNSEEN, fig_rays, "cosine")
-    model_plain, _ = core.fit_visibility_model(train_plain, influence, lobes=2)
-    model_cos, _ = core.fit_visibility_model(train_cos, influence, lobes=2)
+    model_plain, _ = core.visibility.fit_model(train_plain, influence, lobes=2)
+    model_cos, _ = core.visibility.fit_model(train_cos, influence, lobes=2)
     joint_index = [train_plain.bone_names.index(j) for j in model_plain.joints]
     joint_index_cos = [train_cos.bone_names.index(j) for j in model_cos.joints]
-    diffuse = np.asarray(core.diffuse_operator(4))
+    diffuse = np.asarray(core.sh.diffuse_operator(4))
     plain_pred = model_sh(model_plain, unseen_plain, joint_index)
     cos_pred = model_sh(model_cos, unseen_cos, joint_index_cos)
     plain_true, cos_true = truth_sh(unseen_plain), truth_sh(unseen_cos)
@@ -359,10 +359,10 @@ def main():
     started = time.perf_counter()
     cast_set, cast_seconds, cast_rays, _ = bake_frames(obj, TRAIN[:6], fig_rays, below_horizon="cast")
     occl_set, occl_seconds, occl_rays, _ = bake_frames(obj, TRAIN[:6], fig_rays, below_horizon="occluded")
-    ao_cast = np.stack([core.visibility_ambient_occlusion(f) for f in truth_sh(cast_set)])
-    ao_occl = np.stack([core.visibility_ambient_occlusion(f) for f in truth_sh(occl_set)])
-    model_cast, rep_cast = core.fit_visibility_model(cast_set, influence, lobes=2, holdout_stride=0)
-    model_occl, rep_occl = core.fit_visibility_model(occl_set, influence, lobes=2, holdout_stride=0)
+    ao_cast = np.stack([core.visibility.ambient_occlusion(f) for f in truth_sh(cast_set)])
+    ao_occl = np.stack([core.visibility.ambient_occlusion(f) for f in truth_sh(occl_set)])
+    model_cast, rep_cast = core.visibility.fit_model(cast_set, influence, lobes=2, holdout_stride=0)
+    model_occl, rep_occl = core.visibility.fit_model(occl_set, influence, lobes=2, holdout_stride=0)
     results["below_horizon"] = {
         "frames": 6, "cast_seconds": cast_seconds, "occluded_seconds": occl_seconds,
         "cast_rays_per_second": cast_rays / cast_seconds, "occluded_rays_per_second": occl_rays / occl_seconds,
@@ -406,8 +406,8 @@ def bake_weighted(obj, frames, rays, weighting):
     """Like bake_frames, with cosine-weighted projection (fig. 3)."""
     core = native.require()
     job = bake.BakeJob(bpy.context, obj, frames[0], frames[0] + 1, 1, rays, 1, 4, None)
-    training = core.VisibilityTrainingSet(job.vertex_count, job.topology, job.bone_names, order=4, rays=rays,
-                                          weighting=weighting)
+    training = core.visibility.TrainingSet(job.vertex_count, job.topology, job.bone_names, order=4, rays=rays,
+                                           weighting=weighting)
     try:
         for frame in frames:
             _, mesh, rotations, occluders = job.gather(frame)

@@ -124,7 +124,7 @@ def measure(folder, pitch, orthographic=False):
     path = os.path.join(folder, f"footprint_{pitch:g}{'_ortho' if orthographic else ''}.exr")
     scene.render.filepath = path
     bpy.ops.render.render(write_still=True)
-    image = native.require().read_image(path)
+    image = native.require().image.read(path)
     rows = []
     x = WIDTH // 2
     for y in range(0, HEIGHT, 3):

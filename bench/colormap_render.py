@@ -79,13 +79,13 @@ def main():
     set_method(material, ramp, emission, "plain")
     gt_path = os.path.join(OUT, "ground_truth.exr")
     results["gt_seconds"] = render(scene, GT_SPP, gt_path, seed=99)
-    truth = core.read_image(gt_path)
+    truth = core.image.read(gt_path)
     for method in ("plain", "mean", "penumbra"):
         set_method(material, ramp, emission, method)
         for spp in (1, 4, 16):
             path = os.path.join(OUT, f"{method}_{spp}spp.exr")
             seconds = render(scene, spp, path, seed=1)
-            image = core.read_image(path)
+            image = core.image.read(path)
             rmse = float(((image - truth) ** 2).mean() ** 0.5)
             results["runs"].append({"method": method, "spp": spp, "rmse": rmse, "seconds": seconds})
             print(f"{method:9s} {spp:3d} spp  RMSE {rmse:.5f}  {seconds:.2f} s", flush=True)

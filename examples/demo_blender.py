@@ -45,15 +45,15 @@ def hdri_round_trip(out, hdri_name):
     core = native.require()
     source = bundled_world(hdri_name)
     config = color.blender_config()
-    image = core.read_image(source)
+    image = core.image.read(source)
     stem = os.path.splitext(hdri_name)[0]
     exr = os.path.join(out, f"{stem}_roundtrip.exr")
-    core.write_exr(exr, image, half=True, colorspace=config.scene_linear)
+    core.image.write_exr(exr, image, half=True, colorspace=config.scene_linear)
     # A viewable picture: scene-linear to sRGB display, 16-bit PNG.
     display = config.convert(image, config.scene_linear, "sRGB")
     png = os.path.join(out, f"{stem}_srgb.png")
-    core.write_png16(png, display, colorspace="sRGB")
-    back = core.read_image(exr)
+    core.image.write_png16(png, display, colorspace="sRGB")
+    back = core.image.read(exr)
     return {
         "source": source,
         "size": [int(image.shape[1]), int(image.shape[0])],

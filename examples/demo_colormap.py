@@ -37,10 +37,10 @@ def _render(scene, out_folder, name):
     bpy.ops.render.render(write_still=True)
     seconds = time.perf_counter() - started
     core = native.require()
-    image = core.read_image(scene.render.filepath)
+    image = core.image.read(scene.render.filepath)
     srgb = np.where(image <= 0.0031308, 12.92 * image, 1.055 * np.power(np.clip(image, 0, None), 1 / 2.4) - 0.055)
     png = os.path.join(out_folder, name + ".png")
-    core.write_png16(png, np.clip(srgb, 0, 1).astype(np.float32), "sRGB")
+    core.image.write_png16(png, np.clip(srgb, 0, 1).astype(np.float32), "sRGB")
     return image, png, seconds
 
 

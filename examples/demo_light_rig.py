@@ -67,8 +67,8 @@ def run(out_folder):
     preview.pixels.foreach_get(px)
     rgb = px.reshape(h, w, 4)[::-1, :, :3].copy()
     config = color.blender_config()
-    core.write_png16(os.path.join(out_folder, "preview_lights_on_map.png"),
-                     config.convert(rgb, config.scene_linear, "sRGB"), colorspace="sRGB")
+    core.image.write_png16(os.path.join(out_folder, "preview_lights_on_map.png"),
+                           config.convert(rgb, config.scene_linear, "sRGB"), colorspace="sRGB")
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
     _render(scene, os.path.join(out_folder, "render_rig.png"))
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
@@ -76,10 +76,10 @@ def run(out_folder):
     # A rotating 24-frame sequence → keyframed, filtered rig.
     seq = os.path.join(out_folder, "sequence")
     os.makedirs(seq, exist_ok=True)
-    image = core.read_image(hdri)
+    image = core.image.read(hdri)
     for i in range(24):
-        core.write_exr(os.path.join(seq, f"sunrise_{i + 1:04d}.exr"),
-                       core.rotate_equirectangular_z(image, math.radians(3 * i)), half=True, colorspace="Linear")
+        core.image.write_exr(os.path.join(seq, f"sunrise_{i + 1:04d}.exr"),
+                             core.lights.rotate_map_z(image, math.radians(3 * i)), half=True, colorspace="Linear")
     json_anim = os.path.join(out_folder, "rig_animated.json")
     bpy.ops.penumbra.build_light_rig(filepath=os.path.join(seq, "sunrise_0001.exr"), count=32,
                                      frame_start=1, frame_end=24, json_path=json_anim)

@@ -1,4 +1,4 @@
-// Colour management bindings (OpenColorIO).
+// _penumbra.color: colour management (OpenColorIO).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -14,7 +14,7 @@ namespace py = pybind11;
 namespace penumbra::bindings {
 
 void bind_color(py::module_& m) {
-    py::class_<ColorConfig>(m, "ColorConfig",
+    py::class_<ColorConfig>(m, "Config",
         "An OpenColorIO config. Inside Blender, load Blender's own config (penumbra.color.blender_config_path()).")
         .def(py::init([](const std::string& path) { return ColorConfig::load(path); }), py::arg("path") = "",
              "Loads `path`, or $OCIO when empty.")

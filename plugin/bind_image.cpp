@@ -1,10 +1,12 @@
-// Image I/O bindings: files <-> numpy float32 (height, width, 3).
+// _penumbra.image: image, sequence and video files <-> numpy float32
+// (height, width, 3), row 0 at the top.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
 #include "common/error.hpp"
+#include "enums.hpp"
 #include "image/frame_source.hpp"
 #include "image/image_io.hpp"
 #include "image/video.hpp"
@@ -15,14 +17,6 @@ namespace py = pybind11;
 namespace penumbra::bindings {
 
 namespace {
-
-FrameSourceKind parse_kind(const std::string& kind) {
-    if (kind == "auto") return FrameSourceKind::automatic;
-    if (kind == "image") return FrameSourceKind::single_image;
-    if (kind == "sequence") return FrameSourceKind::sequence;
-    if (kind == "video") return FrameSourceKind::video;
-    throw ArgumentError("kind must be 'auto', 'image', 'sequence' or 'video', not '" + kind + "'");
-}
 
 py::dict info_to_dict(const ImageInfo& info) {
     py::dict d;
@@ -50,44 +44,65 @@ py::dict info_to_dict(const VideoInfo& info) {
     return d;
 }
 
-}  // namespace
+py::dict read_info(const std::string& path) {
+    if (is_video_file(path)) {
+        VideoInfo info;
+        {
+            py::gil_scoped_release release;
+            info = probe_video(path);
+        }
+        return info_to_dict(info);
+    }
+    ImageInfo info;
+    {
+        py::gil_scoped_release release;
+        info = read_image_info(path);
+    }
+    return info_to_dict(info);
+}
 
-void bind_image(py::module_& m) {
+py::tuple sanitize_copy(const py::array& pixels, bool clamp_negative) {
+    Image image = array_to_image(pixels, "pixels");
+    PixelDefects d;
+    {
+        py::gil_scoped_release release;
+        d = sanitize(image, clamp_negative);
+    }
+    py::dict counts;
+    counts["nan"] = d.nan;
+    counts["inf"] = d.inf;
+    counts["negative"] = d.negative;
+    return py::make_tuple(image_to_array(std::move(image)), counts);
+}
+
+py::tuple read_frames(const std::string& path, FrameSourceKind kind, int start, int count) {
+    std::unique_ptr<FrameSource> source;
+    std::vector<Image> frames;
+    {
+        py::gil_scoped_release release;
+        source = open_frames(path, kind);
+        const int total = source->frame_count();
+        if (start < 0 || start >= total)
+            throw ArgumentError("start frame " + std::to_string(start) + " is outside 0.." +
+                                std::to_string(total - 1) + " of " + source->describe());
+        const int end = count < 0 ? total : std::min(total, start + count);
+        for (int i = start; i < end; ++i)
+            frames.push_back(source->read(i));
+    }
+    py::list out;
+    for (auto& f : frames)
+        out.append(image_to_array(std::move(f)));
+    return py::make_tuple(out, source->frames_per_second());
+}
+
+void bind_ffmpeg(py::module_& m) {
     m.def("set_ffmpeg_executable", &set_ffmpeg_executable, py::arg("path"),
           "The ffmpeg program that decodes video (the add-on passes the one it ships); '' restores "
           "the default: $PENUMBRA_FFMPEG, else ffmpeg on PATH.");
     m.def("ffmpeg_executable", &ffmpeg_executable, "The ffmpeg program video is decoded with.");
+}
 
-    m.def("read_image_info", [](const std::string& path) {
-        if (is_video_file(path)) {
-            VideoInfo info;
-            {
-                py::gil_scoped_release release;
-                info = probe_video(path);
-            }
-            return info_to_dict(info);
-        }
-        ImageInfo info;
-        {
-            py::gil_scoped_release release;
-            info = read_image_info(path);
-        }
-        return info_to_dict(info);
-    }, py::arg("path"),
-    "Header of an image or video: width, height, channels, subimages (video frames), format, "
-    "colorspace recorded in the file, frames_per_second.");
-
-    m.def("read_image", [](const std::string& path, int frame) {
-        Image image;
-        {
-            py::gil_scoped_release release;
-            image = is_video_file(path) ? VideoReader(path).read(frame) : read_image(path, frame);
-        }
-        return image_to_array(std::move(image));
-    }, py::arg("path"), py::arg("frame") = 0,
-    "Reads an image (or frame `frame` of a video) as float32 (height, width, 3), row 0 at the top. "
-    "Grey images are copied to R, G, B; alpha is dropped; NaN/Inf are kept (see sanitize_image).");
-
+void bind_writers(py::module_& m) {
     m.def("write_exr", [](const std::string& path, const py::array& pixels, bool half, const std::string& colorspace) {
         Image image = array_to_image(pixels, "pixels");
         py::gil_scoped_release release;
@@ -101,20 +116,36 @@ void bind_image(py::module_& m) {
         write_png16(path, image, colorspace);
     }, py::arg("path"), py::arg("pixels"), py::arg("colorspace") = "",
     "Writes pixels as a 16-bit PNG atomically (values clamped to [0, 1]), recording `colorspace`.");
+}
 
-    m.def("sanitize_image", [](const py::array& pixels, bool clamp_negative) {
-        Image image = array_to_image(pixels, "pixels");
-        PixelDefects d;
+}  // namespace
+
+void bind_image(py::module_& m) {
+    bind_enum<FrameSourceKind>(m, "FrameSourceKind", "kind",
+        {{"AUTO", FrameSourceKind::automatic}, {"IMAGE", FrameSourceKind::single_image},
+         {"SEQUENCE", FrameSourceKind::sequence}, {"VIDEO", FrameSourceKind::video}},
+        "What a path is read as. AUTO: a video for a movie file (by extension), a sequence when the name has a "
+        "frame number and neighbours exist, else one image.");
+    bind_ffmpeg(m);
+
+    m.def("read_info", &read_info, py::arg("path"),
+    "Header of an image or video: width, height, channels, subimages (video frames), format, "
+    "colorspace recorded in the file, frames_per_second.");
+
+    m.def("read", [](const std::string& path, int frame) {
+        Image image;
         {
             py::gil_scoped_release release;
-            d = sanitize(image, clamp_negative);
+            image = is_video_file(path) ? VideoReader(path).read(frame) : read_image(path, frame);
         }
-        py::dict counts;
-        counts["nan"] = d.nan;
-        counts["inf"] = d.inf;
-        counts["negative"] = d.negative;
-        return py::make_tuple(image_to_array(std::move(image)), counts);
-    }, py::arg("pixels"), py::arg("clamp_negative") = true,
+        return image_to_array(std::move(image));
+    }, py::arg("path"), py::arg("frame") = 0,
+    "Reads an image (or frame `frame` of a video) as float32 (height, width, 3), row 0 at the top. "
+    "Grey images are copied to R, G, B; alpha is dropped; NaN/Inf are kept (see sanitize).");
+
+    bind_writers(m);
+
+    m.def("sanitize", &sanitize_copy, py::arg("pixels"), py::arg("clamp_negative") = true,
     "Returns (clean copy, counts): NaN and Inf become 0, negatives too if clamp_negative.");
 
     m.def("find_sequence", [](const std::string& first_frame) {
@@ -127,25 +158,8 @@ void bind_image(py::module_& m) {
     }, py::arg("first_frame"),
     "The files of the numbered sequence `first_frame` starts (paths, frame numbers); an error names missing frames.");
 
-    m.def("read_frames", [](const std::string& path, const std::string& kind, int start, int count) {
-        std::unique_ptr<FrameSource> source;
-        std::vector<Image> frames;
-        {
-            py::gil_scoped_release release;
-            source = open_frames(path, parse_kind(kind));
-            const int total = source->frame_count();
-            if (start < 0 || start >= total)
-                throw ArgumentError("start frame " + std::to_string(start) + " is outside 0.." +
-                                    std::to_string(total - 1) + " of " + source->describe());
-            const int end = count < 0 ? total : std::min(total, start + count);
-            for (int i = start; i < end; ++i)
-                frames.push_back(source->read(i));
-        }
-        py::list out;
-        for (auto& f : frames)
-            out.append(image_to_array(std::move(f)));
-        return py::make_tuple(out, source->frames_per_second());
-    }, py::arg("path"), py::arg("kind") = "auto", py::arg("start") = 0, py::arg("count") = -1,
+    m.def("read_frames", &read_frames, py::arg("path"), py::arg("kind") = FrameSourceKind::automatic,
+          py::arg("start") = 0, py::arg("count") = -1,
     "Reads frames of an image, a numbered sequence or a video: (list of (H, W, 3) arrays, frames per second).");
 }
 

@@ -1,11 +1,12 @@
-// 1D-BRDF convolution operator bindings (core/sh/brdf_operator.hpp): dense
-// float64 (order², order²) numpy matrices T with t = T v.
+// _penumbra.sh, 1D-BRDF convolution operators (core/sh/brdf_operator.hpp):
+// dense float64 (order², order²) numpy matrices T with t = T v.
 #include <cmath>
 #include <vector>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include "arrays.hpp"
 #include "bindings.hpp"
 #include "common/error.hpp"
 #include "sh/brdf_operator.hpp"
@@ -13,18 +14,6 @@
 namespace py = pybind11;
 
 namespace penumbra::bindings {
-namespace {
-
-py::array_t<double> matrix_to_array(const Eigen::MatrixXd& matrix) {
-    py::array_t<double> array({matrix.rows(), matrix.cols()});
-    auto out = array.mutable_unchecked<2>();
-    for (Eigen::Index i = 0; i < matrix.rows(); ++i)
-        for (Eigen::Index j = 0; j < matrix.cols(); ++j)
-            out(i, j) = matrix(i, j);
-    return array;
-}
-
-}  // namespace
 
 void bind_sh_operators(py::module_& m) {
     m.def("phong_operator", [](int order, double alpha) {
@@ -50,7 +39,7 @@ void bind_sh_operators(py::module_& m) {
     "Clamped-cosine operator T = (1/pi) integral over the hemisphere of cos(theta) y y^T "
     "(phong_operator(order, 1)); normal along +z.");
 
-    m.def("kernel_operator", [](int order, const py::array_t<double, py::array::c_style | py::array::forcecast>& k_of_mu) {
+    m.def("kernel_operator", [](int order, const Doubles& k_of_mu) {
         if (k_of_mu.ndim() != 1)
             throw ArgumentError("kernel_operator: k_of_mu must be a 1D array of kernel samples");
         const std::vector<double> samples(k_of_mu.data(), k_of_mu.data() + k_of_mu.size());

@@ -1,57 +1,112 @@
-// _penumbra.testing: hooks for tests and benchmarks, kept apart from the API.
+// _penumbra.testing: hooks for tests and benchmarks, kept apart from the API:
+// failures injected into the parallel helper, a probe of that helper, and
+// internals of the light-rig tool that renderers and tests inspect.
+#include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
 #include <chrono>
 #include <mutex>
 #include <string>
 
+#include "arrays.hpp"
 #include "bindings.hpp"
 #include "common/error.hpp"
 #include "common/fault_injection.hpp"
 #include "common/parallel.hpp"
+#include "enums.hpp"
+#include "lights/angular_regions.hpp"
+#include "lights/lights.hpp"
+#include "lights/sampling.hpp"
 
 namespace py = pybind11;
 
 namespace penumbra::bindings {
 
-void bind_testing(py::module_& m) {
-    py::module_ t = m.def_submodule("testing", "Hooks for tests and benchmarks; not for add-on code.");
+namespace {
 
-    t.def("inject_worker_failure", [](const std::string& stage, const std::string& kind) {
-        testing::WorkerFailure failure = testing::WorkerFailure::none;
-        if (kind == "runtime_error") failure = testing::WorkerFailure::runtime_error;
-        else if (kind == "bad_alloc") failure = testing::WorkerFailure::bad_alloc;
-        else if (kind != "none") throw ArgumentError("kind must be 'runtime_error', 'bad_alloc' or 'none'");
-        testing::inject_worker_failure(stage, failure);
-    }, py::arg("stage"), py::arg("kind") = "runtime_error",
+// A loop of `count` blocks that each take about block_seconds and poll
+// parallel_stop_requested(): for tests of failure, cancel and progress
+// through the Python binding.
+std::size_t parallel_probe(std::size_t count, std::size_t block, int threads, double block_seconds,
+                           const std::string& stage, py::object progress) {
+    Progress p;
+    if (!progress.is_none())
+        p = Progress([progress](double f) {
+            py::gil_scoped_acquire gil;
+            return progress(f).cast<bool>();
+        });
+    std::size_t ran = 0;
+    std::mutex m;
+    py::gil_scoped_release release;
+    parallel_for(count * block, {threads, block, stage.c_str()}, [&](std::size_t b, std::size_t e) {
+        const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(block_seconds);
+        while (std::chrono::steady_clock::now() < until && !parallel_stop_requested()) {}
+        std::lock_guard<std::mutex> lock(m);
+        ran += e - b;
+    }, p);
+    return ran;
+}
+
+void bind_parallel_hooks(py::module_& t) {
+    bind_enum<testing::WorkerFailure>(t, "WorkerFailure", "kind",
+        {{"NONE", testing::WorkerFailure::none}, {"RUNTIME_ERROR", testing::WorkerFailure::runtime_error},
+         {"BAD_ALLOC", testing::WorkerFailure::bad_alloc}},
+        "What an injected worker failure throws: nothing (NONE clears one), std::runtime_error or std::bad_alloc.");
+
+    t.def("inject_worker_failure", &testing::inject_worker_failure, py::arg("stage"),
+          py::arg("kind") = testing::WorkerFailure::runtime_error,
     "The next parallel loop whose stage starts with `stage` ('lights', 'colormap', 'sh', 'visibility', or a "
     "full stage name) throws `kind` from one of its blocks, on a worker thread when it has one; one-shot. "
-    "kind='none' clears it.");
+    "kind=NONE clears it.");
 
-    t.def("parallel_probe", [](std::size_t count, std::size_t block, int threads, double block_seconds,
-                               const std::string& stage, py::object progress) {
-        // A loop of `count` blocks that each take about block_seconds and
-        // poll parallel_stop_requested(): for tests of failure, cancel and
-        // progress through the Python binding.
-        Progress p;
-        if (!progress.is_none())
-            p = Progress([progress](double f) {
-                py::gil_scoped_acquire gil;
-                return progress(f).cast<bool>();
-            });
-        std::size_t ran = 0;
-        std::mutex m;
-        py::gil_scoped_release release;
-        parallel_for(count * block, {threads, block, stage.c_str()}, [&](std::size_t b, std::size_t e) {
-            const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(block_seconds);
-            while (std::chrono::steady_clock::now() < until && !parallel_stop_requested()) {}
-            std::lock_guard<std::mutex> lock(m);
-            ran += e - b;
-        }, p);
-        return ran;
-    }, py::arg("count"), py::arg("block") = 1, py::arg("threads") = 0, py::arg("block_seconds") = 0.001,
-    py::arg("stage") = "testing.probe", py::arg("progress") = py::none(),
-    "Runs the core's parallel helper on busy blocks; returns how many indices ran.");
+    t.def("parallel_probe", &parallel_probe, py::arg("count"), py::arg("block") = 1, py::arg("threads") = 0,
+          py::arg("block_seconds") = 0.001, py::arg("stage") = "testing.probe", py::arg("progress") = py::none(),
+          "Runs the core's parallel helper on busy blocks; returns how many indices ran.");
+}
+
+py::dict light_region_table(const py::array& directions, int cells_per_face, double lobe_half_angle) {
+    const lights::AngularRegionTable t(vectors3(directions, "directions", true), cells_per_face, lobe_half_angle);
+    std::vector<double> radius(t.region_count());
+    for (int r = 0; r < t.region_count(); ++r) radius[r] = t.radius(r);
+    py::dict out;
+    out["offsets"] = t.offsets();
+    out["lights"] = t.items();
+    out["radius"] = radius;
+    out["cells_per_face"] = t.cells_per_face();
+    return out;
+}
+
+void bind_light_hooks(py::module_& t) {
+    t.def("light_region_table", &light_region_table, py::arg("directions"), py::arg("cells_per_face") = 6,
+          py::arg("lobe_half_angle") = 1.5707963267948966,
+    "Angular-region table (paper §4.1) for renderers: CSR offsets and light indices per cube-map region.");
+
+    t.def("light_region_of", [](const py::array& normals, int cells_per_face) {
+        const lights::AngularRegionTable table({}, cells_per_face);
+        std::vector<int> out;
+        for (const auto& n : vectors3(normals, "normals", true)) out.push_back(table.region_of(n));
+        return out;
+    }, py::arg("normals"), py::arg("cells_per_face") = 6,
+    "Cube-map region index of each direction: (face·g + row)·g + column, faces +x, −x, +y, −y, +z, −z.");
+
+    t.def("light_sample_points", [](int count, bool blue_noise) {
+        const auto p = lights::sample_points(count, blue_noise);
+        py::array_t<double> out({py::ssize_t(p.size()), py::ssize_t(2)});
+        for (std::size_t i = 0; i < p.size(); ++i) {
+            out.mutable_at(i, 0) = p[i].x();
+            out.mutable_at(i, 1) = p[i].y();
+        }
+        return out;
+    }, py::arg("count"), py::arg("blue_noise") = lights::LightOptions{}.blue_noise,
+    "Halton (2, 3) points from index 1, optionally Lloyd-relaxed.");
+}
+
+}  // namespace
+
+void bind_testing(py::module_& t) {
+    bind_parallel_hooks(t);
+    bind_light_hooks(t);
 }
 
 }  // namespace penumbra::bindings

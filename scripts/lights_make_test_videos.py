@@ -50,7 +50,7 @@ def world_path(name):
 
 def load_world(name, width=None):
     """A bundled world, optionally reduced (area-weighted) to `width` columns."""
-    image = _penumbra.read_image(world_path(name))
+    image = _penumbra.image.read(world_path(name))
     if width and width < image.shape[1]:
         f = image.shape[1] // width
         h, w = image.shape[0] // f, image.shape[1] // f
@@ -94,7 +94,7 @@ def sun_disc(height, width, sun, radius, radiance, sky_radiance=0.0):
 
 
 def rotation_frames(image, frames, degrees_per_frame):
-    return [_penumbra.rotate_equirectangular_z(image, math.radians(degrees_per_frame * i)) for i in range(frames)]
+    return [_penumbra.lights.rotate_map_z(image, math.radians(degrees_per_frame * i)) for i in range(frames)]
 
 
 def crossfade_frames(a, b, frames):
@@ -121,7 +121,7 @@ def write_sequence(folder, frames, stem="frame_"):
     paths = []
     for i, f in enumerate(frames, start=1):
         path = os.path.join(folder, f"{stem}{i:04d}.exr")
-        _penumbra.write_exr(path, f, half=False, colorspace="Linear")
+        _penumbra.image.write_exr(path, f, half=False, colorspace="Linear")
         paths.append(path)
     return paths[0]
 
@@ -130,11 +130,11 @@ def write_video(path, frames, fps=21, config_path=None):
     """Lossless .mov (PNG frames, 16-bit) of x/(1+x) in sRGB, through ffmpeg."""
     if shutil.which("ffmpeg") is None:
         raise RuntimeError("the ffmpeg command is needed to make test videos (apt install ffmpeg)")
-    config = _penumbra.ColorConfig(config_path or "/usr/share/blender/datafiles/colormanagement/config.ocio")
+    config = _penumbra.color.Config(config_path or "/usr/share/blender/datafiles/colormanagement/config.ocio")
     with tempfile.TemporaryDirectory() as tmp:
         for i, f in enumerate(frames):
             display = config.convert((f / (1 + f)).astype(np.float32), config.scene_linear, "sRGB")
-            _penumbra.write_png16(os.path.join(tmp, f"f{i:04d}.png"), display, colorspace="sRGB")
+            _penumbra.image.write_png16(os.path.join(tmp, f"f{i:04d}.png"), display, colorspace="sRGB")
         subprocess.run(["ffmpeg", "-loglevel", "error", "-y", "-framerate", str(fps), "-i",
                         os.path.join(tmp, "f%04d.png"), "-c:v", "png", "-pix_fmt", "rgb48be", path], check=True)
     return path

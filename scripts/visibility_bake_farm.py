@@ -81,7 +81,7 @@ def main():
         paths = sorted({p for pattern in args.pieces for p in glob.glob(pattern)})
         if not paths:
             raise SystemExit("visibility_bake_farm: no pieces found")
-        pieces = [native.require().VisibilityTrainingSet.load(p) for p in paths]
+        pieces = [native.require().visibility.TrainingSet.load(p) for p in paths]
         model, summary = bake.fit_and_store(obj, pieces, args.lobes, os.path.abspath(args.model))
         print(f"visibility_bake_farm: {summary['frames']} frames from {len(paths)} pieces, "
               f"held-out AO error {summary['model_holdout']['ao_mean_abs']:.4f} → {args.model}")

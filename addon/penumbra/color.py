@@ -22,9 +22,9 @@ def blender_config_path():
 
 
 def blender_config():
-    """A _penumbra.ColorConfig for Blender's own config."""
+    """A _penumbra.color.Config for Blender's own config."""
     from . import native
-    return native.require().ColorConfig(blender_config_path())
+    return native.require().color.Config(blender_config_path())
 
 
 def working_space(config):

@@ -49,7 +49,7 @@ def _load():
     sys.modules["_penumbra"] = module
     ffmpeg = bundled_ffmpeg()
     if ffmpeg:
-        module.set_ffmpeg_executable(ffmpeg)
+        module.image.set_ffmpeg_executable(ffmpeg)
 
 
 def bundled_ffmpeg():

@@ -241,6 +241,16 @@ ColorMap ramp_to_color_map(const ColorRamp& ramp, RampSampling sampling, int cha
     const std::vector<RampStop> stops = sorted_stops(ramp);
     std::vector<double> positions, colors;
     auto push = [&](double x, const std::array<float, 4>& c) {
+        for (int k = 0; k < channels; ++k)
+            if (!std::isfinite(c[k]))
+                // Blender's HSV/HSL blends divide by zero for colours outside
+                // [0, 1] (rgb_to_hsl with a negative or over-bright channel);
+                // BKE_colorband_evaluate gives the same NaN, so say why.
+                throw ArgumentError("the ColorRamp evaluates to NaN or Inf at position " + std::to_string(x) +
+                                    (ramp.color_mode == RampColorMode::rgb
+                                         ? std::string(" (colours too large for float arithmetic)")
+                                         : std::string(": its HSV/HSL blend needs colours within [0, 1]; "
+                                                       "use the RGB colour mode or keep the stops' colours in [0, 1]")));
         positions.push_back(x);
         colors.insert(colors.end(), c.begin(), c.begin() + channels);
     };

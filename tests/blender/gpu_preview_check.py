@@ -1,5 +1,6 @@
-"""Run by test_gpu_preview.py in a Blender that has a GPU, never on its own
-in the test suite: Debian's Blender 3.4 in a real window under Xvfb (Mesa's
+"""Run by tests/python/test_gpu_preview_in_blender.py (and
+bench/bench_gpu_preview.py, for the 100k-vertex timing) in a Blender that
+has a GPU: Debian's Blender 3.4 in a real window under Xvfb (Mesa's
 llvmpipe, OpenGL 4.5), or the bpy 5.x module after gpu.init() (EGL):
 
     xvfb-run -a blender --factory-startup --python gpu_preview_check.py -- [--vertices 10000] [--timing-vertices 100000]
@@ -14,7 +15,7 @@ per pixel) and compares per vertex with the CPU:
      against the attributes themselves;
   2. random lobes, frames, positions, lighting and cameras (poles, cameras
      behind the surface, invalid vertices) for every SH order 1–8, 1–4 lobes
-     and each BRDF, against _penumbra.shade_pose.
+     and each BRDF, against _penumbra.sh.shade_pose.
 Then times a pose: the CPU part, the upload, the GPU shading, and (in a
 window) the viewport's own redraw with the preview on and off.
 Prints one line `RESULT {json}`.
@@ -177,7 +178,7 @@ def configurations(sweep):
 
 def random_comparison(vertices, sweep):
     """The configurations the preview supports (all, or the production
-    neighbourhood), against _penumbra.shade_pose."""
+    neighbourhood), against _penumbra.sh.shade_pose."""
     from penumbra import native
     core = native.require()
     rng = np.random.default_rng(7)
@@ -203,9 +204,9 @@ def random_comparison(vertices, sweep):
             camera = rng.normal(size=3) * 2.0
             exponent = float(rng.choice([0.0, 1.0, 7.5, 60.0]))
             transmission = tuple(rng.random(3))
-            rgb, info = core.shade_pose(order, lighting, axes, bands, normals, tangents, brdf=model,
-                                        exponent=exponent, positions=positions, camera=camera,
-                                        transmission=transmission, with_stats=True)
+            rgb, info = core.sh.shade_pose(order, lighting, axes, bands, normals, tangents, brdf=model,
+                                           exponent=exponent, positions=positions, camera=camera,
+                                           transmission=transmission, with_stats=True)
             inputs = gpu_preview.inputs_from_arrays(order, lighting, axes, bands, normals, tangents,
                                                     positions=positions, model=model, phong_exponent=exponent,
                                                     camera=camera, transmission=transmission)
@@ -379,6 +380,5 @@ def main():
 
 main()
 if not bpy.app.background:
-    # A window's Blender would stay open: leave with the script's verdict.
-    sys.stdout.flush()
-    os._exit(0)
+    # A window's Blender would stay open after the script: quit it as a user would.
+    bpy.ops.wm.quit_blender()

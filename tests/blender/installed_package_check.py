@@ -109,7 +109,7 @@ def main():
     native = importlib.import_module(MODULE + ".native")
     report["load_error"] = native.load_error
     report["module_file"] = native.module.__file__ if native.module else None
-    report["ffmpeg"] = native.module.ffmpeg_executable() if native.module else None
+    report["ffmpeg"] = native.module.image.ffmpeg_executable() if native.module else None
     for name, run in (("visibility", lambda: visibility(os.path.join(out, "visibility"))),
                       ("lights", lambda: lights(video, os.path.join(out, "lights"))),
                       ("colormap", lambda: colormap(os.path.join(out, "colormap")))):

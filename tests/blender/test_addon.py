@@ -101,8 +101,8 @@ def test_image_round_trip_through_core_with_blenders_own_ocio(tmp_path):
     srgb = np.linspace(0, 1, 5 * 4 * 3, dtype=np.float32).reshape(5, 4, 3)
     linear = config.to_scene_linear(srgb, "sRGB")
     path = str(tmp_path / "linear.exr")
-    native.module.write_exr(path, linear, half=False, colorspace=config.scene_linear)
-    back = native.module.read_image(path)
+    native.module.image.write_exr(path, linear, half=False, colorspace=config.scene_linear)
+    back = native.module.image.read(path)
     np.testing.assert_array_equal(back, linear)
     # Blender reads the same file to the same numbers.
     image = bpy.data.images.load(path)

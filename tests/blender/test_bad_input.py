@@ -500,7 +500,7 @@ def test_light_rig_from_a_one_pixel_map(addon, tmp_path, capfd):
     lights than pixels are refused, with the most that can be asked for."""
     core = native.require()
     path = str(tmp_path / "one.exr")
-    core.write_exr(path, np.array([[[0.5, 1.0, 2.0]]], np.float32), half=False, colorspace="Linear")
+    core.image.write_exr(path, np.array([[[0.5, 1.0, 2.0]]], np.float32), half=False, colorspace="Linear")
     json_path = str(tmp_path / "rig.json")
     previous, before = undo_checkpoint()
     refused(bpy.ops.penumbra.build_light_rig, "64 exceeds the 1 pixels", "at most", filepath=path, count=64,
@@ -559,7 +559,7 @@ def test_visibility_under_a_one_pixel_map_is_uniform_light(addon, tmp_path, capf
     obj, rig = baked_character(tmp_path)
     core = native.require()
     path = str(tmp_path / "one.exr")
-    core.write_exr(path, np.array([[[0.5, 1.0, 2.0]]], np.float32), half=False, colorspace="Linear")
+    core.image.write_exr(path, np.array([[[0.5, 1.0, 2.0]]], np.float32), half=False, colorspace="Linear")
     _environment_world(addon, path)
     previous, before = undo_checkpoint()
     report = finished(bpy.ops.penumbra.apply_visibility, capfd)
@@ -612,7 +612,7 @@ def test_colour_map_image_of_one_pixel_bakes_a_constant_lookup(addon, tmp_path, 
     previous, before = undo_checkpoint()
     report = finished(bpy.ops.penumbra.bake_colormap_lut, capfd, image_name="dot")
     assert "Filtered image 'dot'" in report
-    lookup = native.require().read_image(str(tmp_path / "luts" / "dot_lut.exr"))
+    lookup = native.require().image.read(str(tmp_path / "luts" / "dot_lut.exr"))
     np.testing.assert_allclose(lookup[..., :3].reshape(-1, 3), np.tile([0.25, 0.5, 0.75], (64, 1)), atol=1e-6)
     assert_undo_works(before, scene_state())
 
@@ -627,9 +627,9 @@ def _noisy_sequence(folder, frames, seed):
     rng = np.random.default_rng(seed)
     img = _sky_and_sun(h=32, w=64, sky=0.05)
     for i in range(frames):
-        frame = core.rotate_equirectangular_z(img, math.radians(10 * i)) + rng.uniform(0, 0.01, img.shape)
-        core.write_exr(str(folder / f"sky_{i + 1:04d}.exr"), frame.astype(np.float32), half=False,
-                       colorspace="Linear")
+        frame = core.lights.rotate_map_z(img, math.radians(10 * i)) + rng.uniform(0, 0.01, img.shape)
+        core.image.write_exr(str(folder / f"sky_{i + 1:04d}.exr"), frame.astype(np.float32), half=False,
+                             colorspace="Linear")
     return str(folder / "sky_0001.exr")
 
 

@@ -81,7 +81,7 @@ def test_ramp_evaluation_matches_blenders_own_in_every_mode(addon, interpolation
             node.color_ramp.color_mode = mode
             node.color_ramp.hue_interpolation = hue
             stops = ramp_io.ramp_stops(node)
-            ours = core.evaluate_color_ramp(stops, positions.astype(np.float32), interpolation, mode, hue)
+            ours = core.colormap.evaluate_ramp(stops, positions.astype(np.float32), interpolation, mode, hue)
             blenders = np.array([node.color_ramp.evaluate(float(p)) for p in positions], np.float32)
             np.testing.assert_allclose(ours, blenders, atol=2e-6, err_msg=f"{interpolation} {mode} {hue}")
 
@@ -129,8 +129,8 @@ def test_bake_replaces_a_noise_driven_ramp_and_keeps_the_original(addon, tmp_pat
     image.pixels.foreach_get(pixels)
     pixels = pixels.reshape(32, 64, 4)
     from penumbra.colormap import ramp as ramp_io
-    knots = native.module.color_ramp_to_knots(ramp_io.ramp_stops(ramp), "LINEAR", "RGB", "NEAR", sampling="cycles")
-    expect = native.module.colormap_lut_knots(knots["positions"], knots["colors"], knots["interpolation"], 64, 32,
+    knots = native.module.colormap.ramp_to_knots(ramp_io.ramp_stops(ramp), "LINEAR", "RGB", "NEAR", sampling="cycles")
+    expect = native.module.colormap.lut_knots(knots["positions"], knots["colors"], knots["interpolation"], 64, 32,
                                               spec["sigma_max"], spec["mean_min"], spec["mean_max"])
     np.testing.assert_allclose(pixels, expect, atol=1e-6)
     # Restore puts the ramp back.
@@ -376,7 +376,7 @@ def _render(scene, path, spp, seed):
     scene.cycles.seed = seed
     scene.render.filepath = path
     bpy.ops.render.render(write_still=True)
-    return native.require().read_image(path)[..., :3].astype(np.float64)
+    return native.require().image.read(path)[..., :3].astype(np.float64)
 
 
 def test_footprint_node_matches_the_projected_pixel(addon, tmp_path):
@@ -543,7 +543,7 @@ def _lookup(tmp_path, mean_min, mean_max, sigma_max, width=256, height=64):
     bilinear error of its table (read as a texture: texel centres, clamped
     edges) against the exact filtered map: the error the group cannot avoid."""
     core = native.require()
-    table = core.colormap_lut_knots(_KNOTS, _MAP, "linear", width, height, sigma_max, mean_min, mean_max)
+    table = core.colormap.lut_knots(_KNOTS, _MAP, "linear", width, height, sigma_max, mean_min, mean_max)
     spec = {"width": width, "height": height, "sigma_max": sigma_max, "mean_min": mean_min, "mean_max": mean_max,
             "sigma_spacing": "linear"}
     image = node_groups.table_image("probe lookup", table, str(tmp_path))
@@ -556,7 +556,7 @@ def _lookup(tmp_path, mean_min, mean_max, sigma_max, width=256, height=64):
         fx, fy = (x - x0)[:, None], (y - y0)[:, None]
         value = ((table[y0, x0] * (1 - fx) + table[y0, x0 + 1] * fx) * (1 - fy)
                  + (table[y0 + 1, x0] * (1 - fx) + table[y0 + 1, x0 + 1] * fx) * fy)
-        return np.abs(value - core.colormap_filtered(_KNOTS, _MAP, "linear", means, sigmas)).max(axis=1)
+        return np.abs(value - core.colormap.filtered(_KNOTS, _MAP, "linear", means, sigmas)).max(axis=1)
     return image, spec, bilinear_error
 
 
@@ -574,7 +574,7 @@ def _table_interp(values_at, x):
 def _render_pixels(scene, path):
     scene.render.filepath = path
     bpy.ops.render.render(write_still=True)
-    return native.require().read_image(path)[..., :3].astype(np.float64).reshape(-1, 3)
+    return native.require().image.read(path)[..., :3].astype(np.float64).reshape(-1, 3)
 
 
 def _random_normals(rng, count, min_deg, max_deg):
@@ -593,7 +593,7 @@ def test_height_filtered_ramp_renders_the_effective_height_distribution(addon, t
     """Penumbra Height Filtered Ramp in Cycles against the core: per pixel,
     Λ_o, Λ_i = smith_lambda(θ, σ_s), (μ_d, σ_d) = effective_height(Λ_o + Λ_i,
     'exact'), Color = the exact filtered map at (mean + μ_d σ_h, σ_d σ_h)
-    (colormap_filtered) and Visibility = average_visibility(Λ_o, Λ_i)."""
+    (colormap.filtered) and Visibility = average_visibility(Λ_o, Λ_i)."""
     core = native.require()
     rng = np.random.default_rng(11)
     count = GRID * GRID
@@ -636,21 +636,21 @@ def test_height_filtered_ramp_renders_the_effective_height_distribution(addon, t
     np.testing.assert_allclose(visibility[:, 1:], np.column_stack([cols - GRID / 2 + 0.5, GRID / 2 - rows - 0.5]),
                                atol=1e-5)
 
-    lam_o = np.array([core.smith_lambda(t, s) for t, s in zip(theta_o, slope_sigma)])
-    lam_i = np.array([core.smith_lambda(t, s) for t, s in zip(theta_i, slope_sigma)])
+    lam_o = np.array([core.colormap.smith_lambda(t, s) for t, s in zip(theta_o, slope_sigma)])
+    lam_i = np.array([core.colormap.smith_lambda(t, s) for t, s in zip(theta_i, slope_sigma)])
 
     def filtering(lam_view, lam_light, shift=True):
-        stats = np.array([core.effective_height(lo + li, "exact") for lo, li in zip(lam_view, lam_light)])
+        stats = np.array([core.colormap.effective_height(lo + li, "exact") for lo, li in zip(lam_view, lam_light)])
         return height_mean + (stats[:, 0] * height_sigma if shift else 0.0), stats[:, 1] * height_sigma
 
     means, sigmas = filtering(lam_o, lam_i)
-    truth = core.colormap_filtered(_KNOTS, _MAP, "linear", means, sigmas)
+    truth = core.colormap.filtered(_KNOTS, _MAP, "linear", means, sigmas)
     # Tolerance per pixel: the lookup's bilinear error at (mean, σ), plus what
     # linear interpolation of the 256-entry microsurface tables of Λ/(1+Λ)
     # and (μ_d, σ_d) changes (the tables' values from the core at their
     # nodes), plus float32.
     def lam_table(a):
-        lam = core.smith_lambda_of_a(a) if a > 0 else np.inf
+        lam = core.colormap.smith_lambda_of_a(a) if a > 0 else np.inf
         return (1.0 if np.isinf(lam) else lam / (1.0 + lam),)
 
     def lam_from_table(theta):
@@ -659,20 +659,20 @@ def test_height_filtered_ramp_renders_the_effective_height_distribution(addon, t
         return g / np.maximum(1.0 - g, 1e-6)
 
     lam_sum = lam_from_table(theta_o) + lam_from_table(theta_i)
-    stats = _table_interp(lambda x: core.effective_height(x, "exact"), lam_sum)
-    tabled = core.colormap_filtered(_KNOTS, _MAP, "linear", height_mean + stats[:, 0] * height_sigma,
+    stats = _table_interp(lambda x: core.colormap.effective_height(x, "exact"), lam_sum)
+    tabled = core.colormap.filtered(_KNOTS, _MAP, "linear", height_mean + stats[:, 0] * height_sigma,
                                     stats[:, 1] * height_sigma)
     tolerance = bilinear_error(means, sigmas) + np.abs(tabled - truth).max(axis=1) + 2e-4
     error = np.abs(color - truth).max(axis=1)
     print(f"height group: max error {error.max():.2e}, max error/tolerance {(error / tolerance).max():.2f}, "
           f"median tolerance {np.median(tolerance):.1e}")
     assert (error < tolerance).all(), (error.max(), int(np.argmax(error / tolerance)))
-    np.testing.assert_allclose(visibility[:, 0], [core.average_visibility(lo, li) for lo, li in zip(lam_o, lam_i)],
-                               atol=2e-3)
+    np.testing.assert_allclose(visibility[:, 0],
+                               [core.colormap.average_visibility(lo, li) for lo, li in zip(lam_o, lam_i)], atol=2e-3)
     # The test can fail: ignoring the view angle or the shift of the height
     # distribution moves many pixels far outside the tolerance.
     for wrong in (filtering(np.zeros(count), lam_i), filtering(lam_o, lam_i, shift=False)):
-        off = np.abs(color - core.colormap_filtered(_KNOTS, _MAP, "linear", *wrong)).max(axis=1)
+        off = np.abs(color - core.colormap.filtered(_KNOTS, _MAP, "linear", *wrong)).max(axis=1)
         assert (off > 5 * tolerance).sum() > count // 3, (off / tolerance)
 
 
@@ -714,19 +714,19 @@ def test_slope_filtered_ramp_renders_the_visible_slope_distribution(addon, tmp_p
             theta = np.arccos(np.clip(eye @ n, -1, 1)) if view else 0.0
             phi = np.arctan2(eye @ t2, eye @ t1)
             var = slope_sigma[k] ** 2
-            mean, cov = core.slope_filtering(theta, phi, (0.0, 0.0), (var, 0.0, var), "numerical", 401)
+            mean, cov = core.colormap.slope_filtering(theta, phi, (0.0, 0.0), (var, 0.0, var), "numerical", 401)
             means[k] = at_zero[k] + per_slope[k] * (np.array(mean) @ d)
             c = np.array([[cov[0], cov[1]], [cov[1], cov[2]]])
             sigmas[k] = abs(per_slope[k]) * np.sqrt(d @ c @ d)
         return means, sigmas
 
     means, sigmas = expected()
-    truth = core.colormap_filtered(_KNOTS, _MAP, "linear", means, sigmas)
+    truth = core.colormap.filtered(_KNOTS, _MAP, "linear", means, sigmas)
     # Tolerance per pixel: the lookup's bilinear error at (mean, σ), plus what
     # linear interpolation of the 256-entry table of (E[z], sd[z]) changes
     # (and the brute force's own error), plus float32.
     cot = np.cos(theta_o) / np.maximum(np.sin(theta_o), 1e-6)
-    shift = _table_interp(lambda c: core.slope_shift(c), cot / slope_sigma)
+    shift = _table_interp(lambda c: core.colormap.slope_shift(c), cot / slope_sigma)
     cos_psi = np.empty(count)
     for k in range(count):
         t1, t2, n = _tangent_frame(normals[k])
@@ -734,7 +734,7 @@ def test_slope_filtered_ramp_renders_the_visible_slope_distribution(addon, tmp_p
         view = np.array([t1[2], t2[2]])  # the eye (+Z) in the plane's frame
         cos_psi[k] = d @ view / np.linalg.norm(d) / max(np.linalg.norm(view), 1e-12)
     k_sigma = per_slope * slope_sigma
-    tabled = core.colormap_filtered(
+    tabled = core.colormap.filtered(
         _KNOTS, _MAP, "linear", at_zero + k_sigma * shift[:, 0] * cos_psi,
         np.abs(k_sigma) * np.sqrt(np.maximum(1.0 - (1.0 - shift[:, 1] ** 2) * cos_psi ** 2, 0.0)))
     tolerance = bilinear_error(means, sigmas) + np.abs(tabled - truth).max(axis=1) + 2e-4
@@ -744,5 +744,5 @@ def test_slope_filtered_ramp_renders_the_visible_slope_distribution(addon, tmp_p
     assert (error < tolerance).all(), (error.max(), int(np.argmax(error / tolerance)))
     # The test can fail: ignoring the view (the slopes' unshifted
     # distribution) moves many pixels far outside the tolerance.
-    off = np.abs(color - core.colormap_filtered(_KNOTS, _MAP, "linear", *expected(view=False))).max(axis=1)
+    off = np.abs(color - core.colormap.filtered(_KNOTS, _MAP, "linear", *expected(view=False))).max(axis=1)
     assert (off > 5 * tolerance).sum() > count // 3, (off / tolerance)

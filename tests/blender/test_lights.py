@@ -39,7 +39,7 @@ def _ensure_nodes(id_block):
 
 
 def _write_map(path, image):
-    _core().write_exr(path, image.astype(np.float32), half=False, colorspace="Linear")
+    _core().image.write_exr(path, image.astype(np.float32), half=False, colorspace="Linear")
     return path
 
 
@@ -121,7 +121,7 @@ def test_rig_reproduces_the_maps_irradiance_and_is_updated_not_duplicated(addon,
     suns = [o for o in coll.objects if o.type == "LIGHT"]
     assert len(suns) == 64 and all(o.data.type == "SUN" for o in suns)
     assert sum(1 for o in coll.objects if o.type == "EMPTY") == 1
-    normals = _core().fibonacci_directions(200)
+    normals = _core().sh.fibonacci_directions(200)
     ref = _map_irradiance(img, normals)
     got = _rig_irradiance(scene, normals)
     y = np.array([0.2126, 0.7152, 0.0722])
@@ -232,8 +232,8 @@ def test_sequence_gives_linear_keyframes_without_flips(addon, tmp_path):
     folder.mkdir()
     img = _sky_and_sun(sky=0.05)
     for i in range(6):
-        core.write_exr(str(folder / f"sky_{i + 1:04d}.exr"),
-                       core.rotate_equirectangular_z(img, math.radians(10 * i)), half=False, colorspace="Linear")
+        core.image.write_exr(str(folder / f"sky_{i + 1:04d}.exr"),
+                             core.lights.rotate_map_z(img, math.radians(10 * i)), half=False, colorspace="Linear")
     assert bpy.ops.penumbra.build_light_rig(filepath=str(folder / "sky_0001.exr"), count=12, frame_start=10,
                                             frame_end=40, json_path=str(tmp_path / "s.json")) == {"FINISHED"}
     from penumbra.lights.rig_objects import fcurve
@@ -278,7 +278,7 @@ def _render_plane(scene, tmp_path, name):
     scene.render.image_settings.file_format = "OPEN_EXR"
     scene.render.filepath = str(tmp_path / name)
     bpy.ops.render.render(write_still=True)
-    pixels = _core().read_image(str(tmp_path / name) + ".exr")
+    pixels = _core().image.read(str(tmp_path / name) + ".exr")
     return pixels.reshape(-1, 3).mean(axis=0)
 
 
@@ -422,8 +422,8 @@ def test_a_failure_half_way_leaves_the_rig_and_json_as_they_were(addon, tmp_path
         folder.mkdir()
         img = _sky_and_sun(h=32, w=64, sun=sun, sky=0.05)
         for i in range(3):
-            core.write_exr(str(folder / f"sky_{i + 1:04d}.exr"),
-                           core.rotate_equirectangular_z(img, math.radians(15 * i)), half=False, colorspace="Linear")
+            core.image.write_exr(str(folder / f"sky_{i + 1:04d}.exr"),
+                                 core.lights.rotate_map_z(img, math.radians(15 * i)), half=False, colorspace="Linear")
     # A keyframed rig of 6 suns is in the file.
     assert bpy.ops.penumbra.build_light_rig(filepath=str(tmp_path / "a" / "sky_0001.exr"), count=6,
                                             json_path=json_path) == {"FINISHED"}

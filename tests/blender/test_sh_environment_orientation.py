@@ -1,9 +1,9 @@
-"""`_penumbra.project_environment` is oriented exactly as Blender's World maps
+"""`_penumbra.sh.project_environment` is oriented exactly as Blender's World maps
 an Environment Texture: checked against Cycles itself.
 
 Cycles bakes the diffuse lighting (irradiance / π, albedo excluded) of a
 convex ico-sphere lit only by a World that shows a strongly directional
-equirectangular image. The same image projected with project_environment and
+equirectangular image. The same image projected with sh.project_environment and
 convolved with the clamped cosine (coefficients computed here by quadrature,
 independently of the core) must predict every vertex. A mirrored or rotated
 mapping would be off by far more than the tolerance."""
@@ -49,7 +49,7 @@ def clamped_cosine_bands(order):
 
 def predicted_diffuse_light(coeffs, normals):
     """E(n)/π = Σ_l (Â_l/π) Σ_m L_lm y_lm(n)."""
-    y = _penumbra.sh_eval(ORDER, normals)
+    y = _penumbra.sh.eval(ORDER, normals)
     a = clamped_cosine_bands(ORDER)
     scale = np.concatenate([[a[l]] * (2 * l + 1) for l in range(ORDER)])
     return (y * scale) @ coeffs
@@ -98,15 +98,15 @@ def _linear_name():
 def test_projection_predicts_cycles_world_lighting(factory_scene, tmp_path):
     image = directional_image()
     path = str(tmp_path / "probe.exr")
-    _penumbra.write_exr(path, image, half=False)
+    _penumbra.image.write_exr(path, image, half=False)
     normals, baked = bake_world_lighting(path, samples=256)
 
-    coeffs = _penumbra.project_environment(ORDER, image)
+    coeffs = _penumbra.sh.project_environment(ORDER, image)
     predicted = predicted_diffuse_light(coeffs, normals)
 
     # Orientation is the point: a mirrored mapping must fail. Build it and
     # check it is far off, so this test can tell the two apart.
-    mirrored = predicted_diffuse_light(_penumbra.project_environment(ORDER, image[:, ::-1].copy()), normals)
+    mirrored = predicted_diffuse_light(_penumbra.sh.project_environment(ORDER, image[:, ::-1].copy()), normals)
     error = np.abs(predicted - baked).max() / baked.max()
     mirrored_error = np.abs(mirrored - baked).max() / baked.max()
     print(f"relative error {error:.4f}, mirrored mapping {mirrored_error:.4f}, peak {baked.max():.3f}")

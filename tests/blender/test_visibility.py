@@ -121,7 +121,7 @@ def test_bake_operator_writes_a_model_and_reports_the_joints(addon, tmp_path):
     assert summary["zh_fit"]["sh_rms"] < summary["model_holdout"]["sh_rms"]
     assert summary["model_bytes"] < summary["dense_bytes"]
     assert summary["constant_vertices"] > 0
-    model = native.module.VisibilityPoseModel.load(s.model_path)
+    model = native.module.visibility.PoseModel.load(s.model_path)
     assert model.vertex_count == len(obj.data.vertices)
     assert model.joints == [j for j in rig.pose.bones.keys() if j in summary["active_joints"]]
     assert model.summary["holdout_ao_mean_abs"] == pytest.approx(summary["model_holdout"]["ao_mean_abs"])
@@ -364,7 +364,7 @@ def test_pieces_baked_separately_merge_into_the_same_model(addon, tmp_path):
     _, second = bake.bake_training_set(bpy.context, obj, 13, 23, 2, rays=64)
     first.save(os.path.join(str(tmp_path), "a.pvis"))
     second.save(os.path.join(str(tmp_path), "b.pvis"))
-    pieces = [core.VisibilityTrainingSet.load(os.path.join(str(tmp_path), n)) for n in ("b.pvis", "a.pvis")]
+    pieces = [core.visibility.TrainingSet.load(os.path.join(str(tmp_path), n)) for n in ("b.pvis", "a.pvis")]
     _, merged = bake.fit_and_store(obj, pieces, 2, os.path.join(str(tmp_path), "merged.pzh"))
     assert bake_op(tmp_path, filepath=os.path.join(str(tmp_path), "whole.pzh")) == {"FINISHED"}
     whole = json.loads(obj.penumbra_visibility.report)

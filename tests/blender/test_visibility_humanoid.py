@@ -73,7 +73,7 @@ def test_the_humanoid_is_a_closed_outward_skin_of_about_the_asked_size(humanoid)
     positions = np.array([v.co for v in mesh.vertices], dtype=np.float32)
     normals = scene_data._vertex_normals(mesh)
     triangles = scene_data.mesh_triangles(mesh)
-    diagnostics = native.require().visibility_mesh_diagnostics(positions, normals, triangles)
+    diagnostics = native.require().visibility.mesh_diagnostics(positions, normals, triangles)
     assert not diagnostics["normals_point_inward"] and diagnostics["signed_volume"] > 0.02  # m³, a person
     # A person-sized figure: about 1.5 m from toes to the top of the head.
     height = positions[:, 2].max() - positions[:, 2].min()

@@ -9,7 +9,7 @@ from conftest import BLENDER_OCIO
 
 @pytest.fixture(scope="module")
 def config():
-    return _penumbra.ColorConfig(BLENDER_OCIO)
+    return _penumbra.color.Config(BLENDER_OCIO)
 
 
 def srgb_to_linear(v):
@@ -56,4 +56,4 @@ def test_exception_in_progress_callback_propagates(config):
 
 def test_missing_config_is_a_clear_error():
     with pytest.raises(_penumbra.PenumbraError, match="not found"):
-        _penumbra.ColorConfig("/nowhere/config.ocio")
+        _penumbra.color.Config("/nowhere/config.ocio")

@@ -24,7 +24,7 @@ def brute_force(colors, mean, sigma, n=200001):
 def test_colormap_lut_follows_the_contract_layout_and_matches_brute_force():
     rng = np.random.default_rng(3)
     colors = rng.random((9, 3)).astype(np.float32)
-    lut = pen.colormap_lut(colors, 33, 17, 0.3, -0.25, 1.25)
+    lut = pen.colormap.lut(colors, 33, 17, 0.3, -0.25, 1.25)
     assert lut.shape == (17, 33, 3) and lut.dtype == np.float32
     for y in (0, 5, 16):
         for x in (0, 7, 20, 32):
@@ -37,7 +37,7 @@ def test_colormap_lut_follows_the_contract_layout_and_matches_brute_force():
 
 def test_large_sigma_tends_to_the_clamped_maps_mean():
     colors = np.array([[0.0, 1.0], [1.0, 0.0], [0.2, 0.6]], np.float32)
-    lut = pen.colormap_lut(colors, 5, 3, 1e9, 0.0, 1.0)
+    lut = pen.colormap.lut(colors, 5, 3, 1e9, 0.0, 1.0)
     np.testing.assert_allclose(lut[2, 2], [(0.0 + 0.2) / 2, (1.0 + 0.6) / 2], atol=1e-6)
 
 
@@ -51,33 +51,33 @@ def test_bad_arguments_raise_value_error(kwargs, message):
     args = dict(colors=np.zeros((2, 3), np.float32), width=8, height=8, sigma_max=0.2, mean_min=0.0, mean_max=1.0)
     args.update(kwargs)
     with pytest.raises(ValueError, match=message):
-        pen.colormap_lut(**args)
+        pen.colormap.lut(**args)
 
 
 def test_nan_colours_are_rejected():
     colors = np.array([[0.0, 0.0, 0.0], [np.nan, 1.0, 1.0]], np.float32)
     with pytest.raises(ValueError, match="finite"):
-        pen.colormap_lut(colors, 8, 8, 0.2, 0.0, 1.0)
+        pen.colormap.lut(colors, 8, 8, 0.2, 0.0, 1.0)
 
 
 def test_single_colour_gives_a_constant_table():
-    lut = pen.colormap_lut(np.array([[0.1, 0.2, 0.3, 1.0]], np.float32), 4, 4, 0.5, -1.0, 2.0)
+    lut = pen.colormap.lut(np.array([[0.1, 0.2, 0.3, 1.0]], np.float32), 4, 4, 0.5, -1.0, 2.0)
     np.testing.assert_allclose(lut.reshape(-1, 4), np.tile([0.1, 0.2, 0.3, 1.0], (16, 1)), atol=1e-7)
 
 
 def test_progress_is_reported_and_false_cancels():
     seen = []
-    pen.colormap_lut(np.zeros((2, 3), np.float32), 16, 64, 0.2, 0.0, 1.0, progress=lambda f: seen.append(f))
+    pen.colormap.lut(np.zeros((2, 3), np.float32), 16, 64, 0.2, 0.0, 1.0, progress=lambda f: seen.append(f))
     assert seen and seen[-1] == 1.0
     with pytest.raises(pen.Cancelled):
-        pen.colormap_lut(np.zeros((2, 3), np.float32), 16, 64, 0.2, 0.0, 1.0, progress=lambda f: False)
+        pen.colormap.lut(np.zeros((2, 3), np.float32), 16, 64, 0.2, 0.0, 1.0, progress=lambda f: False)
 
 
 def test_bilinear_accuracy_report_matches_an_independent_bilinear_lookup():
     rng = np.random.default_rng(5)
     colors = rng.random((6, 1)).astype(np.float32)
-    lut = pen.colormap_lut(colors, 16, 16, 0.2, 0.0, 1.0)
-    report = pen.colormap_lut_accuracy(np.linspace(0, 1, 6), colors, "linear", lut, 0.2, 0.0, 1.0, probes=50)
+    lut = pen.colormap.lut(colors, 16, 16, 0.2, 0.0, 1.0)
+    report = pen.colormap.lut_accuracy(np.linspace(0, 1, 6), colors, "linear", lut, 0.2, 0.0, 1.0, probes=50)
     # Recompute the worst probe's error here with numpy's own bilinear interpolation.
     m, s = report["worst_mean"], report["worst_sigma"]
     fx, fy = m * 15, s / 0.2 * 15
@@ -93,15 +93,15 @@ def test_bilinear_accuracy_report_matches_an_independent_bilinear_lookup():
 def test_microsurface_functions_against_closed_forms():
     # Λ from the paper's Eq. 3 written here.
     a = 0.8
-    assert pen.smith_lambda_of_a(a) == pytest.approx(
+    assert pen.colormap.smith_lambda_of_a(a) == pytest.approx(
         math.exp(-a * a / 2) / (math.sqrt(2 * math.pi) * a) - 0.5 * math.erfc(a / math.sqrt(2)), rel=1e-12)
-    assert pen.smith_lambda(math.pi / 2, 0.3) == math.inf
-    assert pen.average_visibility(1.0, 3.0) == pytest.approx(0.4)
+    assert pen.colormap.smith_lambda(math.pi / 2, 0.3) == math.inf
+    assert pen.colormap.average_visibility(1.0, 3.0) == pytest.approx(0.4)
     # Λ_sum = 1: the larger of two standard normals.
-    mean, sd = pen.effective_height(1.0)
+    mean, sd = pen.colormap.effective_height(1.0)
     assert mean == pytest.approx(1 / math.sqrt(math.pi), abs=1e-8)
     assert sd == pytest.approx(math.sqrt(1 - 1 / math.pi), abs=1e-8)
-    g_mean, g_cov = pen.slope_filtering(1.2, 0.3, [0.0, 0.0], [0.1, 0.02, 0.05])
-    n_mean, n_cov = pen.slope_filtering(1.2, 0.3, [0.0, 0.0], [0.1, 0.02, 0.05], method="numerical")
+    g_mean, g_cov = pen.colormap.slope_filtering(1.2, 0.3, [0.0, 0.0], [0.1, 0.02, 0.05])
+    n_mean, n_cov = pen.colormap.slope_filtering(1.2, 0.3, [0.0, 0.0], [0.1, 0.02, 0.05], method="numerical")
     np.testing.assert_allclose(g_mean, n_mean, atol=3e-5)
     np.testing.assert_allclose(g_cov, n_cov, atol=3e-5)

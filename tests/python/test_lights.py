@@ -30,12 +30,12 @@ def numpy_irradiance(image, normals):
 
 def test_region_lights_reproduce_numpy_irradiance_of_a_bundled_world():
     image = videos.load_world("forest", 256)
-    normals = _penumbra.fibonacci_directions(300)
+    normals = _penumbra.sh.fibonacci_directions(300)
     reference = numpy_irradiance(np.maximum(image, 0), normals)
     errors = {}
     for n in (16, 64, 256):
-        lights = _penumbra.light_rig_lights(image, count=n)
-        e = _penumbra.light_rig_irradiance(lights["directions"], lights["rgb"], normals)
+        lights = _penumbra.lights.frame_lights(image, count=n)
+        e = _penumbra.lights.irradiance(lights["directions"], lights["rgb"], normals)
         y = np.array([0.2126, 0.7152, 0.0722])
         errors[n] = math.sqrt((((e - reference) @ y) ** 2).sum() / ((reference @ y) ** 2).sum())
     assert errors[256] < errors[16]
@@ -44,50 +44,50 @@ def test_region_lights_reproduce_numpy_irradiance_of_a_bundled_world():
 
 def test_exact_irradiance_binding_agrees_with_numpy():
     image = videos.sun_disc(64, 128, (0.3, 0.2, 0.9), 0.2, 50.0, sky_radiance=0.5)
-    normals = _penumbra.fibonacci_directions(40)
-    ours = _penumbra.light_rig_exact_irradiance(image, normals)
+    normals = _penumbra.sh.fibonacci_directions(40)
+    ours = _penumbra.lights.exact_irradiance(image, normals)
     np.testing.assert_allclose(ours, numpy_irradiance(image, normals), rtol=1e-6, atol=1e-9)
 
 
 def test_uniform_sky_gives_pi_times_radiance():
-    lights = _penumbra.light_rig_lights(videos.sky(64, 128, 2.0), count=128)
+    lights = _penumbra.lights.frame_lights(videos.sky(64, 128, 2.0), count=128)
     np.testing.assert_allclose(lights["rgb"].sum(axis=0), 4 * math.pi * 2.0, rtol=1e-6)
-    e = _penumbra.light_rig_irradiance(lights["directions"], lights["rgb"], _penumbra.fibonacci_directions(100))
+    e = _penumbra.lights.irradiance(lights["directions"], lights["rgb"], _penumbra.sh.fibonacci_directions(100))
     assert abs(e[:, 0].mean() / (2 * math.pi) - 1) < 0.02
 
 
 def test_bad_input_is_a_clear_error():
     good = videos.sky(8, 16)
     with pytest.raises(ValueError, match="at least 1"):
-        _penumbra.light_rig_lights(good, count=0)
+        _penumbra.lights.frame_lights(good, count=0)
     with pytest.raises(ValueError, match="exceeds"):
-        _penumbra.light_rig_lights(good, count=8 * 16 + 1)
+        _penumbra.lights.frame_lights(good, count=8 * 16 + 1)
     with pytest.raises(ValueError, match="empty"):
-        _penumbra.light_rig_lights(np.zeros((0, 16, 3), np.float32))
+        _penumbra.lights.frame_lights(np.zeros((0, 16, 3), np.float32))
     with pytest.raises(ValueError, match="mapping"):
-        _penumbra.light_rig_lights(good, mapping="cube")
+        _penumbra.lights.frame_lights(good, mapping="cube")
     with pytest.raises(ValueError, match="sampler"):
-        _penumbra.light_rig_lights(good, sampler="median_cut")
+        _penumbra.lights.frame_lights(good, sampler="median_cut")
     for channels in (1, 2, 4):
-        lights = _penumbra.light_rig_lights(np.ones((8, 16, channels), np.float32), count=4)
+        lights = _penumbra.lights.frame_lights(np.ones((8, 16, channels), np.float32), count=4)
         assert np.isfinite(lights["rgb"]).all() and lights["total_power"] > 0
     bad = good.copy()
     bad[0, 0, 0] = np.nan
     bad[1, 1, 1] = np.inf
     bad[2, 2, 2] = -1
-    lights = _penumbra.light_rig_lights(bad, count=4)
+    lights = _penumbra.lights.frame_lights(bad, count=4)
     assert lights["defects"] == {"nan": 1, "inf": 1, "negative": 1}
     assert np.isfinite(lights["rgb"]).all()
-    black = _penumbra.light_rig_lights(np.zeros((8, 16, 3), np.float32), count=4)
+    black = _penumbra.lights.frame_lights(np.zeros((8, 16, 3), np.float32), count=4)
     assert black["total_power"] == 0 and np.isfinite(black["directions"]).all()
 
 
 def test_sequence_rig_conserves_energy_and_tracks_lights(tmp_path):
     frames = videos.rotation_frames(videos.sun_disc(64, 128, (1, 0, 0.5), 0.1, 100.0, 0.2), 12, 3.0)
     first = videos.write_sequence(str(tmp_path / "seq"), frames)
-    source = _penumbra.open_light_source(first)
+    source = _penumbra.lights.open_source(first)
     assert source.frame_count == 12
-    builder = _penumbra.LightRigBuilder(count=16, frames_per_second=21)
+    builder = _penumbra.lights.RigBuilder(count=16, frames_per_second=21)
     for i in range(source.frame_count):
         builder.add_frame_from(source, i)
     rig = builder.finish()
@@ -114,10 +114,10 @@ def test_sequence_with_a_gap_or_a_size_change_is_an_io_error(tmp_path):
     first = videos.write_sequence(str(tmp_path / "gap"), frames)
     os.remove(str(tmp_path / "gap" / "frame_0002.exr"))
     with pytest.raises(OSError, match="missing frames"):
-        _penumbra.open_light_source(first)
+        _penumbra.lights.open_source(first)
     first = videos.write_sequence(str(tmp_path / "size"), [videos.sky(8, 16), videos.sky(16, 32)])
-    source = _penumbra.open_light_source(first)
-    builder = _penumbra.LightRigBuilder(count=4)
+    source = _penumbra.lights.open_source(first)
+    builder = _penumbra.lights.RigBuilder(count=4)
     builder.add_frame_from(source, 0)
     with pytest.raises(OSError, match="same size"):
         builder.add_frame_from(source, 1)
@@ -126,10 +126,10 @@ def test_sequence_with_a_gap_or_a_size_change_is_an_io_error(tmp_path):
 def test_video_is_read_through_a_display_colour_space(tmp_path):
     frames = videos.rotation_frames(videos.sun_disc(32, 64, (1, 0, 0.3), 0.2, 3.0, 0.01), 6, 5.0)
     path = videos.write_video(str(tmp_path / "rot.mov"), frames, fps=24)
-    source = _penumbra.open_light_source(path)
+    source = _penumbra.lights.open_source(path)
     assert source.frame_count == 6 and abs(source.frames_per_second - 24) < 0.01
-    config = _penumbra.ColorConfig(BLENDER_OCIO)
-    builder = _penumbra.LightRigBuilder(count=8)
+    config = _penumbra.color.Config(BLENDER_OCIO)
+    builder = _penumbra.lights.RigBuilder(count=8)
     for i in range(6):
         builder.add_frame_from(source, i, config, "sRGB")
     rig = builder.finish(source.frames_per_second)
@@ -152,20 +152,20 @@ def test_truncated_video_is_an_io_error(tmp_path):
     with open(tmp_path / "cut.mov", "wb") as f:
         f.write(data[: len(data) // 3])
     with pytest.raises(OSError):
-        source = _penumbra.open_light_source(str(tmp_path / "cut.mov"))
+        source = _penumbra.lights.open_source(str(tmp_path / "cut.mov"))
         for i in range(source.frame_count):
             source.read(i)
 
 
 def test_clustering_and_region_tables_through_the_bindings():
-    lights = _penumbra.light_rig_lights(videos.load_world("courtyard", 256), count=200)
-    c = _penumbra.light_rig_cluster(lights["directions"], lights["rgb"], max_clusters=20)
+    lights = _penumbra.lights.frame_lights(videos.load_world("courtyard", 256), count=200)
+    c = _penumbra.lights.cluster(lights["directions"], lights["rgb"], max_clusters=20)
     assert len(c["index"]) <= 20
     np.testing.assert_allclose(c["rgb"].sum(axis=0), lights["rgb"].sum(axis=0), rtol=1e-9)
-    table = _penumbra.light_rig_region_table(lights["directions"], 6)
+    table = _penumbra.testing.light_region_table(lights["directions"], 6)
     assert len(table["offsets"]) == 217
-    normals = _penumbra.fibonacci_directions(50)
-    regions = _penumbra.light_rig_region_of(normals, 6)
+    normals = _penumbra.sh.fibonacci_directions(50)
+    regions = _penumbra.testing.light_region_of(normals, 6)
     for n, r in zip(normals, regions):
         members = set(table["lights"][table["offsets"][r]:table["offsets"][r + 1]])
         visible = set(np.nonzero(lights["directions"] @ n > 0)[0].tolist())
@@ -173,7 +173,7 @@ def test_clustering_and_region_tables_through_the_bindings():
 
 
 def test_filter_taps_match_the_paper_at_21_hz():
-    taps = np.array(_penumbra.light_rig_filter(21.0))
+    taps = np.array(_penumbra.lights.temporal_filter(21.0))
     paper = np.array([0.06216, 0.01296, -0.13816, 0.28315, 0.65223, 0.28315, -0.13816, 0.01296, 0.06216])
     np.testing.assert_allclose(taps, paper / paper.sum(), atol=1e-12)
-    assert abs(np.sum(_penumbra.light_rig_filter(60.0)) - 1) < 1e-12
+    assert abs(np.sum(_penumbra.lights.temporal_filter(60.0)) - 1) < 1e-12

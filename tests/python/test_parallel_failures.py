@@ -20,12 +20,12 @@ import lights_make_test_videos as videos  # noqa: E402
 
 
 def lights_region_powers():
-    return p.light_rig_lights(videos.sky(64, 128, 2.0), count=64)["rgb"]
+    return p.lights.frame_lights(videos.sky(64, 128, 2.0), count=64)["rgb"]
 
 
 def colormap_lookup():
     colors = np.array([[0, 0, 0, 1], [1, 0.5, 0.2, 1]], np.float32)
-    return p.colormap_lut(colors, 256, 64, 0.3, -0.25, 1.25)
+    return p.colormap.lut(colors, 256, 64, 0.3, -0.25, 1.25)
 
 
 def pose_shading():
@@ -37,7 +37,7 @@ def pose_shading():
     normals = np.tile([0.0, 0.0, 1.0], (n, 1))
     tangents = np.tile([1.0, 0.0, 0.0], (n, 1))
     lighting = rng.normal(size=(9, 3))
-    return p.shade_pose(3, lighting, axes, bands, normals, tangents)[0]
+    return p.sh.shade_pose(3, lighting, axes, bands, normals, tangents)[0]
 
 
 def visibility_bake():
@@ -46,9 +46,9 @@ def visibility_bake():
 
 def visibility_fit_and_shade():
     ts = bake([0.0, 0.4, 0.8], rays=32)
-    model, _ = p.fit_visibility_model(ts, [(True, True), (True, False)], lobes=1)
+    model, _ = p.visibility.fit_model(ts, [(True, True), (True, False)], lobes=1)
     positions, normals, tris, _ = two_sphere_character()
-    neighbours = p.visibility_reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
+    neighbours = p.visibility.reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
     rotations = np.stack([np.eye(3, dtype=np.float32)] * len(model.joints))
     return model.shade(rotations, positions, normals, tris, neighbours, np.eye(16, 3))[0]
 

@@ -1,4 +1,4 @@
-"""_penumbra.phong_operator against an exact reference built here.
+"""_penumbra.sh.phong_operator against an exact reference built here.
 
 The reference shares nothing with the C++ closed form: the Legendre
 polynomials come from Rodrigues' formula in exact rational arithmetic, the
@@ -66,7 +66,7 @@ def index(l, m):
 
 
 def worst_relative_error(order, alpha):
-    t = _penumbra.phong_operator(order, alpha)
+    t = _penumbra.sh.phong_operator(order, alpha)
     worst = 0.0
     for m in range(order):
         for l in range(m, order):
@@ -108,7 +108,7 @@ def test_phong_operator_keeps_relative_accuracy_of_every_nonzero_entry(alpha):
 def test_entries_that_vanish_at_integer_alpha_are_exactly_zero(alpha):
     # E.g. ∫_0^1 μ^α P_l dμ = 0 for l = α+2, α+4, …; at α = 1 (diffuse) 252 of
     # the 816 distinct order-16 entries vanish. Rounding noise would show.
-    t = _penumbra.phong_operator(16, alpha)
+    t = _penumbra.sh.phong_operator(16, alpha)
     vanishing = 0
     for m in range(16):
         for l in range(m, 16):
@@ -123,7 +123,7 @@ def test_entries_that_vanish_at_integer_alpha_are_exactly_zero(alpha):
 
 @pytest.mark.parametrize("alpha", [0.0, 1e-12, 2.5, 1e6])
 def test_phong_operator_is_exactly_zero_between_different_m(alpha):
-    t = _penumbra.phong_operator(ORDER, alpha)
+    t = _penumbra.sh.phong_operator(ORDER, alpha)
     assert t.shape == (ORDER**2, ORDER**2) and t.dtype == np.float64
     for l in range(ORDER):
         for m in range(-l, l + 1):
@@ -139,37 +139,37 @@ def test_phong_operator_approaches_yz_yz_transposed_as_alpha_grows():
     for l in range(ORDER):
         yz[index(l, 0)] = math.sqrt((2 * l + 1) / (4 * math.pi))
     limit = np.outer(yz, yz)
-    error_1e6 = np.abs(_penumbra.phong_operator(ORDER, 1e6) - limit).max()
-    error_1e9 = np.abs(_penumbra.phong_operator(ORDER, 1e9) - limit).max()
+    error_1e6 = np.abs(_penumbra.sh.phong_operator(ORDER, 1e6) - limit).max()
+    error_1e9 = np.abs(_penumbra.sh.phong_operator(ORDER, 1e9) - limit).max()
     assert error_1e6 < 1e-4
     assert error_1e9 * 1e9 == pytest.approx(error_1e6 * 1e6, rel=1e-2)  # O(1/α)
-    np.testing.assert_allclose(_penumbra.phong_operator(ORDER, math.inf), limit, rtol=1e-15, atol=0)
+    np.testing.assert_allclose(_penumbra.sh.phong_operator(ORDER, math.inf), limit, rtol=1e-15, atol=0)
 
 
 def test_diffuse_operator_is_phong_at_alpha_1_and_shades_unit_radiance_to_one():
-    t = _penumbra.diffuse_operator(ORDER)
-    np.testing.assert_array_equal(t, _penumbra.phong_operator(ORDER, 1.0))
+    t = _penumbra.sh.diffuse_operator(ORDER)
+    np.testing.assert_array_equal(t, _penumbra.sh.phong_operator(ORDER, 1.0))
     unit = np.zeros(ORDER**2)
     unit[0] = math.sqrt(4 * math.pi)
     assert unit @ t @ unit == pytest.approx(1.0, rel=1e-15)
 
 
 def test_kernel_operator_reproduces_the_linear_diffuse_kernel():
-    t = _penumbra.kernel_operator(ORDER, np.array([0.0, 1.0 / math.pi]))
-    np.testing.assert_allclose(t, _penumbra.diffuse_operator(ORDER), rtol=0, atol=1e-14)
-    dense = _penumbra.kernel_operator(ORDER, [(8 + 1) / (2 * math.pi) * x**8 for x in np.linspace(0, 1, 2001)])
-    np.testing.assert_allclose(dense, _penumbra.phong_operator(ORDER, 8.0), rtol=0, atol=1e-5)
+    t = _penumbra.sh.kernel_operator(ORDER, np.array([0.0, 1.0 / math.pi]))
+    np.testing.assert_allclose(t, _penumbra.sh.diffuse_operator(ORDER), rtol=0, atol=1e-14)
+    dense = _penumbra.sh.kernel_operator(ORDER, [(8 + 1) / (2 * math.pi) * x**8 for x in np.linspace(0, 1, 2001)])
+    np.testing.assert_allclose(dense, _penumbra.sh.phong_operator(ORDER, 8.0), rtol=0, atol=1e-5)
 
 
 @pytest.mark.parametrize("call", [
-    lambda: _penumbra.phong_operator(0, 1.0),
-    lambda: _penumbra.phong_operator(17, 1.0),
-    lambda: _penumbra.phong_operator(4, -0.5),
-    lambda: _penumbra.phong_operator(4, math.nan),
-    lambda: _penumbra.diffuse_operator(0),
-    lambda: _penumbra.kernel_operator(4, [1.0]),
-    lambda: _penumbra.kernel_operator(4, [1.0, math.inf]),
-    lambda: _penumbra.kernel_operator(4, np.ones((2, 2))),
+    lambda: _penumbra.sh.phong_operator(0, 1.0),
+    lambda: _penumbra.sh.phong_operator(17, 1.0),
+    lambda: _penumbra.sh.phong_operator(4, -0.5),
+    lambda: _penumbra.sh.phong_operator(4, math.nan),
+    lambda: _penumbra.sh.diffuse_operator(0),
+    lambda: _penumbra.sh.kernel_operator(4, [1.0]),
+    lambda: _penumbra.sh.kernel_operator(4, [1.0, math.inf]),
+    lambda: _penumbra.sh.kernel_operator(4, np.ones((2, 2))),
 ])
 def test_invalid_arguments_raise_value_error(call):
     with pytest.raises(ValueError):

@@ -1,6 +1,6 @@
-"""_penumbra.shade_pose (core/sh/pose_shading.hpp) against a numpy
+"""_penumbra.sh.shade_pose (core/sh/pose_shading.hpp) against a numpy
 brute-force reference: the truncated visibility (ZH lobes as Legendre series,
-no SH rotation) times the truncated lighting (sh_eval) times the kernel,
+no SH rotation) times the truncated lighting (sh.eval) times the kernel,
 integrated over the hemisphere by Gauss-Legendre x equal steps, exact for
 these polynomials. Plus closed forms (unit radiance) and the contract of the
 binding (shapes, dtypes, errors, invalid vertices)."""
@@ -98,12 +98,12 @@ def brute_force(order, lighting, pose, brdf, exponent=1.0, camera=None, transmis
         axis = reflection_axis(n[i], pose["positions"][i], camera) if brdf == "phong" else n[i]
         dirs, weights, mu = hemisphere(axis)
         kernel = (exponent + 1) / (2 * math.pi) * mu ** exponent if brdf == "phong" else mu / math.pi
-        radiance = _penumbra.sh_eval(order, dirs) @ lighting
+        radiance = _penumbra.sh.eval(order, dirs) @ lighting
         vis = zonal_visibility(axes_world, pose["lobe_bands"][i], dirs)
         out[i] = (weights * kernel * vis) @ radiance
         if brdf == "translucent":
             dirs, weights, mu = hemisphere(-n[i])
-            out[i] += np.asarray(transmission) * ((weights * mu / math.pi) @ (_penumbra.sh_eval(order, dirs) @ lighting))
+            out[i] += np.asarray(transmission) * ((weights * mu / math.pi) @ (_penumbra.sh.eval(order, dirs) @ lighting))
     return out
 
 
@@ -114,8 +114,8 @@ def unit_radiance(order):
 
 
 def shade(order, lighting, pose, **kwargs):
-    return _penumbra.shade_pose(order, lighting, pose["lobe_axes"], pose["lobe_bands"], pose["normals"],
-                                pose["tangents"], **kwargs)
+    return _penumbra.sh.shade_pose(order, lighting, pose["lobe_axes"], pose["lobe_bands"], pose["normals"],
+                                   pose["tangents"], **kwargs)
 
 
 def fully_visible(rng, n, order, dtype=np.float64):
@@ -150,13 +150,13 @@ def test_unoccluded_vertex_under_environment_gives_its_truncated_irradiance():
     image = np.stack([sky + 4 * sun, sky + 2 * sun, 1.5 * sky], axis=-1).astype(np.float32)
     rng = np.random.default_rng(2)
     for order in (2, 3, 4):
-        lighting = _penumbra.project_environment(order, image)
+        lighting = _penumbra.sh.project_environment(order, image)
         pose = fully_visible(rng, 20, order)
         rgb = shade(order, lighting, pose)
         n = pose["normals"] / np.linalg.norm(pose["normals"], axis=1, keepdims=True)
         for i in range(len(n)):
             dirs, weights, mu = hemisphere(n[i])
-            irradiance_over_pi = (weights * mu / math.pi) @ (_penumbra.sh_eval(order, dirs) @ lighting)
+            irradiance_over_pi = (weights * mu / math.pi) @ (_penumbra.sh.eval(order, dirs) @ lighting)
             np.testing.assert_allclose(rgb[i], irradiance_over_pi, rtol=1e-6, atol=1e-6)
 
 
@@ -208,7 +208,7 @@ def test_turning_the_whole_scene_leaves_shades_unchanged():
     camera = np.array([2.0, 1.0, -3.0])
     for brdf in ("diffuse", "phong", "translucent"):
         a = shade(order, lighting, pose, brdf=brdf, exponent=9.0, positions=pose["positions"], camera=camera)
-        b = shade(order, _penumbra.rotate_sh(lighting, r), turned, brdf=brdf, exponent=9.0,
+        b = shade(order, _penumbra.sh.rotate(lighting, r), turned, brdf=brdf, exponent=9.0,
                   positions=turned["positions"], camera=r @ camera)
         np.testing.assert_allclose(a, b, rtol=1e-5, atol=1e-6)
 
@@ -276,11 +276,11 @@ def test_bad_arguments_raise_value_error():
         args.pop("positions")
         args.update(case)
         with pytest.raises(ValueError):
-            _penumbra.shade_pose(args.pop("order"), args.pop("lighting"), args.pop("lobe_axes"),
-                                 args.pop("lobe_bands"), args.pop("normals"), args.pop("tangents"), **args)
+            _penumbra.sh.shade_pose(args.pop("order"), args.pop("lighting"), args.pop("lobe_axes"),
+                                    args.pop("lobe_bands"), args.pop("normals"), args.pop("tangents"), **args)
 
 
 def test_empty_pose_gives_empty_output():
-    out = _penumbra.shade_pose(2, np.zeros((4, 3)), np.zeros((0, 1, 3)), np.zeros((0, 1, 2)), np.zeros((0, 3)),
-                               np.zeros((0, 3)))
+    out = _penumbra.sh.shade_pose(2, np.zeros((4, 3)), np.zeros((0, 1, 3)), np.zeros((0, 1, 2)), np.zeros((0, 3)),
+                                  np.zeros((0, 3)))
     assert out.shape == (0, 3) and out.dtype == np.float32

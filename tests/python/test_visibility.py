@@ -46,9 +46,9 @@ def two_sphere_character():
 
 def bake(angles, rays=64):
     positions, normals, tris, n_body = two_sphere_character()
-    neighbours = p.visibility_reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
-    topology = p.visibility_topology_hash(len(positions), np.full(len(tris), 3), tris.ravel())
-    ts = p.VisibilityTrainingSet(len(positions), topology, ["root", "arm"], order=4, rays=rays)
+    neighbours = p.visibility.reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
+    topology = p.visibility.topology_hash(len(positions), np.full(len(tris), 3), tris.ravel())
+    ts = p.visibility.TrainingSet(len(positions), topology, ["root", "arm"], order=4, rays=rays)
     for i, angle in enumerate(angles):
         r = rot_z(angle)
         posed, posed_normals = positions.copy(), normals.copy()
@@ -60,7 +60,7 @@ def bake(angles, rays=64):
 
 def test_far_side_of_the_body_sees_its_whole_upper_hemisphere():
     ts = bake([0.0])
-    ao = p.visibility_ambient_occlusion(ts.visibility(0).astype(np.float64))
+    ao = p.visibility.ambient_occlusion(ts.visibility(0).astype(np.float64))
     positions, _, _, n_body = two_sphere_character()
     far = np.where(positions[:n_body, 0] < -0.9)[0]
     near = np.where((positions[:n_body, 0] > 0.95))[0]
@@ -70,17 +70,17 @@ def test_far_side_of_the_body_sees_its_whole_upper_hemisphere():
 
 def test_fit_save_load_and_synthesize_round_trip(tmp_path):
     ts = bake(np.linspace(0.0, np.pi / 2, 12))
-    model, report = p.fit_visibility_model(ts, [(True, True), (True, False)], lobes=2)
+    model, report = p.visibility.fit_model(ts, [(True, True), (True, False)], lobes=2)
     assert [j["active"] for j in report["joints"]] == [False, True]
     assert report["holdout_frames"] == 3
     path = str(tmp_path / "m.pzh")
     model.save(path)
-    loaded = p.VisibilityPoseModel.load(path)
+    loaded = p.visibility.PoseModel.load(path)
     assert loaded.joints == ["arm"] and loaded.vertex_count == ts.vertex_count
     axes, bands, params = loaded.synthesize(np.stack([rot_z(0.3)]))
     assert axes.shape == (ts.vertex_count, 2, 3) and bands.shape == (ts.vertex_count, 2, 4)
     np.testing.assert_allclose(np.linalg.norm(axes, axis=2), 1.0, atol=1e-5)
-    sh = p.zh_params_to_sh(params.astype(np.float64))
+    sh = p.visibility.zh_params_to_sh(params.astype(np.float64))
     assert sh.shape == (ts.vertex_count, 16)
     unseen = bake([0.05, 0.7, 1.2])
     errors = loaded.evaluate(unseen)
@@ -92,8 +92,8 @@ def test_training_set_pieces_save_load_and_merge(tmp_path):
     a, b = bake([0.0, 0.2]), bake([0.4])
     a.save(str(tmp_path / "a.pvis"))
     b.save(str(tmp_path / "b.pvis"))
-    merged = p.VisibilityTrainingSet.merge([p.VisibilityTrainingSet.load(str(tmp_path / "b.pvis")),
-                                            p.VisibilityTrainingSet.load(str(tmp_path / "a.pvis"))])
+    merged = p.visibility.TrainingSet.merge([p.visibility.TrainingSet.load(str(tmp_path / "b.pvis")),
+                                            p.visibility.TrainingSet.load(str(tmp_path / "a.pvis"))])
     # Frame 0 is in both pieces: kept once, from the first piece given (b).
     assert merged.frame_numbers == [0.0, 1.0]
     np.testing.assert_array_equal(merged.visibility(0), b.visibility(0))
@@ -102,20 +102,20 @@ def test_training_set_pieces_save_load_and_merge(tmp_path):
 
 def test_bad_files_are_os_errors(tmp_path):
     with pytest.raises(OSError, match="no such file"):
-        p.VisibilityPoseModel.load(str(tmp_path / "missing.pzh"))
+        p.visibility.PoseModel.load(str(tmp_path / "missing.pzh"))
     (tmp_path / "junk.pzh").write_bytes(b"x" * 100)
     with pytest.raises(p.IoError, match="magic"):
-        p.VisibilityPoseModel.load(str(tmp_path / "junk.pzh"))
+        p.visibility.PoseModel.load(str(tmp_path / "junk.pzh"))
     ts = bake([0.0])
     ts.save(str(tmp_path / "s.pvis"))
     with pytest.raises(OSError, match="other kind"):
-        p.VisibilityPoseModel.load(str(tmp_path / "s.pvis"))
+        p.visibility.PoseModel.load(str(tmp_path / "s.pvis"))
 
 
 def test_bad_shapes_are_value_errors():
     positions, normals, tris, _ = two_sphere_character()
-    ts = p.VisibilityTrainingSet(len(positions), 0, ["a"], rays=16)
-    nb = p.visibility_reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
+    ts = p.visibility.TrainingSet(len(positions), 0, ["a"], rays=16)
+    nb = p.visibility.reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
     with pytest.raises(ValueError, match="positions"):
         ts.bake_frame(0, positions[:, :2], normals, tris, nb, np.eye(3, dtype=np.float32)[None])
     with pytest.raises(ValueError, match="expected 1 rotations"):
@@ -123,15 +123,15 @@ def test_bad_shapes_are_value_errors():
     with pytest.raises(ValueError, match="vertices"):
         ts.bake_frame(0, positions[:10], normals[:10], tris[:2], nb[:10], np.eye(3)[None])
     with pytest.raises(ValueError, match="below_horizon"):
-        p.VisibilityTrainingSet(3, 0, [], below_horizon="sometimes")
+        p.visibility.TrainingSet(3, 0, [], below_horizon="sometimes")
     with pytest.raises(ValueError, match="rays"):
-        p.VisibilityTrainingSet(3, 0, [], rays=1)
+        p.visibility.TrainingSet(3, 0, [], rays=1)
 
 
 def test_progress_false_cancels_and_keeps_the_set_unchanged():
     positions, normals, tris, _ = two_sphere_character()
-    nb = p.visibility_reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
-    ts = p.VisibilityTrainingSet(len(positions), 0, ["a"], rays=65536)
+    nb = p.visibility.reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
+    ts = p.visibility.TrainingSet(len(positions), 0, ["a"], rays=65536)
     with pytest.raises(p.Cancelled):
         ts.bake_frame(0, positions, normals, tris, nb, np.eye(3)[None], progress=lambda f: False)
     assert len(ts) == 0
@@ -142,10 +142,10 @@ def test_progress_false_cancels_and_keeps_the_set_unchanged():
 
 def test_scene_builds_give_the_same_visibility_and_a_bad_name_is_a_value_error():
     positions, normals, tris, n_body = two_sphere_character()
-    neighbours = p.visibility_reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
+    neighbours = p.visibility.reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
     results = {}
     for build in ("high", "medium", "low", "refit"):
-        ts = p.VisibilityTrainingSet(len(positions), 0, ["root", "arm"], rays=64)
+        ts = p.visibility.TrainingSet(len(positions), 0, ["root", "arm"], rays=64)
         stats = []
         for i, angle in enumerate((0.0, 0.4, 0.8)):  # the arm moves: the kept scene is updated
             r = rot_z(angle)
@@ -161,8 +161,8 @@ def test_scene_builds_give_the_same_visibility_and_a_bad_name_is_a_value_error()
     for build in ("medium", "low", "refit"):
         for a, b in zip(results["high"], results[build]):
             np.testing.assert_array_equal(a, b)
-    p.visibility_release_bake_cache()
-    ts = p.VisibilityTrainingSet(len(positions), 0, ["root", "arm"], rays=64)
+    p.visibility.release_bake_cache()
+    ts = p.visibility.TrainingSet(len(positions), 0, ["root", "arm"], rays=64)
     with pytest.raises(ValueError, match="scene_build"):
         ts.bake_frame(0, positions, normals, tris, neighbours, np.stack([np.eye(3, dtype=np.float32)] * 2),
                       scene_build="fast")
@@ -173,9 +173,9 @@ def test_shading_from_many_threads_at_once_equals_one_at_a_time():
     # operators); concurrent calls with different BRDFs must not disturb each other.
     import threading
     ts = bake(np.linspace(0.0, np.pi / 2, 8))
-    model, _ = p.fit_visibility_model(ts, [(True, True), (True, False)], lobes=2)
+    model, _ = p.visibility.fit_model(ts, [(True, True), (True, False)], lobes=2)
     positions, normals, tris, n_body = two_sphere_character()
-    neighbours = p.visibility_reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
+    neighbours = p.visibility.reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
     rng = np.random.default_rng(1)
     lighting = rng.normal(size=(16, 3))
     lighting[0] += 5.0

@@ -124,8 +124,8 @@ def table_image(name, pixels, folder=None):
     folder = folder or default_folder()
     os.makedirs(folder, exist_ok=True)
     path = os.path.join(folder, bpy.path.clean_name(name) + ".exr")
-    native.require().write_exr(path, np.ascontiguousarray(pixels[::-1], dtype=np.float32), half=False,
-                               colorspace="Non-Color")
+    native.require().image.write_exr(path, np.ascontiguousarray(pixels[::-1], dtype=np.float32), half=False,
+                                     colorspace="Non-Color")
     image = bpy.data.images.get(name)
     if image is not None and os.path.normpath(bpy.path.abspath(image.filepath)) == path:
         image.reload()
@@ -454,11 +454,11 @@ def microsurface_image(folder=None):
     x = u / (1.0 - u)
     pixels = np.ones((2, n, 4), np.float32)  # bottom-up rows
     for i, xi in enumerate(x):
-        lam = core.smith_lambda_of_a(xi) if xi > 0 else math.inf
+        lam = core.colormap.smith_lambda_of_a(xi) if xi > 0 else math.inf
         pixels[0, i, 0] = 1.0 if math.isinf(lam) else lam / (1.0 + lam)
-        mean, sd = core.effective_height(xi, "exact")
+        mean, sd = core.colormap.effective_height(xi, "exact")
         pixels[0, i, 1], pixels[0, i, 2] = mean, sd
-        pixels[1, i, 0], pixels[1, i, 1] = core.slope_shift(xi)
+        pixels[1, i, 0], pixels[1, i, 1] = core.colormap.slope_shift(xi)
     return table_image(MICROSURFACE_IMAGE, pixels, folder)
 
 

@@ -245,12 +245,11 @@ class BakePlan:
         core = native.require()
         s = self.spec
         if self.image is not None:
-            return core.colormap_lut(self.samples, s["width"], s["height"], s["sigma_max"], s["mean_min"],
+            return core.colormap.lut(self.samples, s["width"], s["height"], s["sigma_max"], s["mean_min"],
                                      s["mean_max"], sigma_spacing=s["sigma_spacing"], progress=progress)
-        sampling = "cycles" if self.settings.sampling == "CYCLES" else "exact"
-        knots = core.color_ramp_to_knots(self.stops, *self.modes, sampling=sampling, channels=4)
+        knots = core.colormap.ramp_to_knots(self.stops, *self.modes, sampling=self.settings.sampling, channels=4)
         self.sampling_error = knots["max_sampling_error"]
-        return core.colormap_lut_knots(knots["positions"], knots["colors"], knots["interpolation"], s["width"],
+        return core.colormap.lut_knots(knots["positions"], knots["colors"], knots["interpolation"], s["width"],
                                        s["height"], s["sigma_max"], s["mean_min"], s["mean_max"],
                                        sigma_spacing=s["sigma_spacing"], progress=progress)
 
@@ -261,9 +260,9 @@ class BakePlan:
         path = self.lookup_paths()[0]
         # σ = 0 at the bottom (Blender's v = 0), so the node maps σ to v directly.
         pixels = np.ascontiguousarray(lut[::-1])
-        core.write_exr(path, pixels, half=False, colorspace="Non-Color")
+        core.image.write_exr(path, pixels, half=False, colorspace="Non-Color")
         if self.settings.write_png:
-            core.write_png16(os.path.splitext(path)[0] + ".png", pixels, colorspace="Non-Color")
+            core.image.write_png16(os.path.splitext(path)[0] + ".png", pixels, colorspace="Non-Color")
         image = None
         for existing in bpy.data.images:
             if existing.filepath and os.path.normpath(bpy.path.abspath(existing.filepath)) == path:

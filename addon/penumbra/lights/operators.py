@@ -99,7 +99,7 @@ class _Job:
             self.frames = 1
             self.fps = 0.0
         else:
-            self.source = self.core.open_light_source(path)
+            self.source = self.core.lights.open_source(path)
             self.fps = self.source.frames_per_second
             wanted = max(1, op.frame_end - op.frame_start + 1)
             self.frames = min(self.source.frame_count, wanted)
@@ -108,7 +108,7 @@ class _Job:
         matrix = None
         if world_from_map is not None:
             matrix = [list(row) for row in world_from_map]
-        self.builder = self.core.LightRigBuilder(
+        self.builder = self.core.lights.RigBuilder(
             count=op.count, sampler=op.sampler, blue_noise=op.blue_noise, power=op.power, mapping=op.mapping,
             temporal_filter=op.temporal_filter, frames_per_second=self.fps, cluster_max=op.cluster_max,
             adaptive_tolerance=op.adaptive_tolerance, world_from_map=matrix)

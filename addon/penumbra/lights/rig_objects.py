@@ -228,7 +228,7 @@ class _Snapshot:
 
 def write_rig(scene, settings, rig, frame_start, limit_shadows):
     """Creates or updates the collection, root and suns from `rig` (the dict of
-    _penumbra.LightRigBuilder.finish) with keyframes from frame_start.
+    _penumbra.lights.RigBuilder.finish) with keyframes from frame_start.
 
     All or nothing: the values are computed and checked first; if anything
     fails while the .blend is being changed, what was created is removed and

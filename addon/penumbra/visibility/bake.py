@@ -3,7 +3,7 @@ bake visibility and fit (C++ with the GIL released), write the model, store
 the report on the object.
 
 The seam for render farms: `bake_training_set` bakes a frame range of one
-object into a _penumbra.VisibilityTrainingSet, which can be saved (.pvis)
+object into a _penumbra.visibility.TrainingSet, which can be saved (.pvis)
 from a headless job (scripts/visibility_bake_farm.py); `fit_and_store`
 merges any number of pieces and fits. The operator runs the same two steps.
 """
@@ -74,10 +74,10 @@ class BakeJob:
         self.vertex_count = len(obj.data.vertices)
         self.topology = scene_data.topology_hash(obj.data)
         sizes, loops = scene_data.polygon_topology(obj.data)
-        self.neighbours = core.visibility_reference_neighbours(self.vertex_count, sizes, loops)
+        self.neighbours = core.visibility.reference_neighbours(self.vertex_count, sizes, loops)
         self.influence = scene_data.bone_influence(obj, self.armature)
-        self.training = core.VisibilityTrainingSet(self.vertex_count, self.topology, self.bone_names, order=sh_order,
-                                                   rays=rays, below_horizon=below_horizon)
+        self.training = core.visibility.TrainingSet(self.vertex_count, self.topology, self.bone_names, order=sh_order,
+                                                    rays=rays, below_horizon=below_horizon)
         self.original_frame = self.scene.frame_current
         self.original_action = self.armature.animation_data.action if self.armature.animation_data else None
         self.diagnostics = None
@@ -113,7 +113,7 @@ class BakeJob:
                 f"({len(mesh.positions)} vertices after modifiers, {self.vertex_count} in the mesh); "
                 f"disable or apply {', '.join(changing) or 'the generating modifiers'} before baking")
         if self.diagnostics is None:
-            d = native.require().visibility_mesh_diagnostics(mesh.positions, mesh.normals, mesh.triangles)
+            d = native.require().visibility.mesh_diagnostics(mesh.positions, mesh.normals, mesh.triangles)
             if d["normals_point_inward"]:
                 raise VisibilityInputError(
                     f"the normals of '{self.obj.name}' point inward (signed volume {d['signed_volume']:.3g}); "
@@ -137,7 +137,7 @@ class BakeJob:
         self.repaired_normals = max(self.repaired_normals, stats["repaired_normals"])
 
     def restore_frame(self):
-        native.require().visibility_release_bake_cache()  # the Embree scene kept between frames
+        native.require().visibility.release_bake_cache()  # the Embree scene kept between frames
         if self.actions and self.armature.animation_data is not None and \
                 self.armature.animation_data.action != self.original_action:
             self.armature.animation_data.action = self.original_action
@@ -231,7 +231,7 @@ def bake_training_set(context, obj, frame_start, frame_end, frame_step, rays=256
 
 def fit_model(training, influence, lobes, threads=0, progress=None):
     core = native.require()
-    return core.fit_visibility_model(training, influence, lobes=lobes, threads=threads, progress=progress)
+    return core.visibility.fit_model(training, influence, lobes=lobes, threads=threads, progress=progress)
 
 
 def summary_of(job_or_none, training, report, model_path, seconds_bake, seconds_fit, model):
@@ -244,8 +244,8 @@ def summary_of(job_or_none, training, report, model_path, seconds_bake, seconds_
         "rays": training.rays,
         "sh_order": training.order,
         "lobes": model.lobes,
-        "below_horizon": training.below_horizon,
-        "pose_features": model.features,
+        "below_horizon": training.below_horizon.name.lower(),  # the report keeps the names it always had
+        "pose_features": model.features.name.lower(),
         "active_joints": [j["name"] for j in kept],
         "joints": report["joints"],
         "zh_fit": report["zh_fit"],
@@ -282,7 +282,7 @@ def store_result(obj, model, summary, path):
 def fit_and_store(obj, pieces, lobes, path, threads=0, progress=None, job=None, seconds_bake=0.0):
     """Merges training-set pieces (one or many), fits, writes the model, stores the summary."""
     core = native.require()
-    training = pieces[0] if len(pieces) == 1 else core.VisibilityTrainingSet.merge(list(pieces))
+    training = pieces[0] if len(pieces) == 1 else core.visibility.TrainingSet.merge(list(pieces))
     armature = scene_data.armature_of(obj)
     if training.vertex_count != len(obj.data.vertices) or training.topology_hash != scene_data.topology_hash(obj.data):
         raise VisibilityInputError(f"the baked frames were made from another mesh than '{obj.name}'")
@@ -375,7 +375,7 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
             raise VisibilityInputError("a model needs at least two training frames: widen the frame range")
         self._settings = r
         self._job = BakeJob(context, r["obj"], r["frame_start"], r["frame_end"], r["frame_step"], r["rays"],
-                            r["lobes"], r["sh_order"], r["occluders"], self.below_horizon.lower(),
+                            r["lobes"], r["sh_order"], r["occluders"], self.below_horizon,
                             context.scene.penumbra.visibility.threads, r["actions"])
         self._started = time.perf_counter()
 

@@ -7,8 +7,8 @@ viewport and following the pose. A display mode only
 untouched by it.
 
 Per pose, on the CPU (the core, GIL released): step 1, the ZH lobes of the
-pose (`VisibilityPoseModel.synthesize`), and the frames of the deformed
-mesh (`visibility_vertex_frames`, the rule the bake used), from the same
+pose (`visibility.PoseModel.synthesize`), and the frames of the deformed
+mesh (`visibility.vertex_frames`, the rule the bake used), from the same
 model, mesh, lighting and BRDF settings as runtime.shade_object. They go to
 the GPU as vertex attributes; the lighting, T and the camera as a uniform
 block. The frame-change and depsgraph handlers compute them (object_inputs);
@@ -63,7 +63,7 @@ class PoseInputs:
 def inputs_from_arrays(order, lighting, axes, bands, normals, tangents, positions=None, model="diffuse",
                        phong_exponent=16.0, camera=(0.0, 0.0, 0.0), transmission=(0.5, 0.5, 0.5),
                        triangles=None):
-    """PoseInputs from the arrays `_penumbra.shade_pose` takes (same meaning)."""
+    """PoseInputs from the arrays `_penumbra.sh.shade_pose` takes (same meaning)."""
     axes = np.asarray(axes, dtype=np.float32)
     bands = np.asarray(bands, dtype=np.float32)
     if positions is None:
@@ -102,7 +102,7 @@ def object_inputs(obj, scene, depsgraph=None):
     threads = scene.penumbra.visibility.threads
     axes, bands, _ = model.synthesize(rotations, threads)
     t2 = time.perf_counter()
-    frames, _ = core.visibility_vertex_frames(frame.positions, frame.normals, entry.buffers.triangles,
+    frames, _ = core.visibility.vertex_frames(frame.positions, frame.normals, entry.buffers.triangles,
                                               entry.neighbours)
     t3 = time.perf_counter()
     lighting, _ = scene_data.world_lighting(scene, model.order)
@@ -197,7 +197,7 @@ def _vertex_buffer(inputs):
 def shade_offscreen(inputs):
     """Shades every vertex of `inputs` on the GPU, one vertex per pixel of an
     RGBA32F offscreen buffer, and reads it back: (rgb (V, 3), visibility (V,))
-    float32, unclamped (what `_penumbra.shade_pose` returns). Needs a GPU
+    float32, unclamped (what `_penumbra.sh.shade_pose` returns). Needs a GPU
     (gpu_unavailable_reason() is None) and a GPU context: under a window
     (e.g. xvfb-run), or after gpu.init() in the bpy 5.x module."""
     import gpu

@@ -73,7 +73,7 @@ def quarter_turn(order):
     core = native.require()
     rotation = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
     n = order * order
-    x = np.asarray(core.rotate_sh(np.eye(n), rotation), dtype=np.float64).reshape(n, n)
+    x = np.asarray(core.sh.rotate(np.eye(n), rotation), dtype=np.float64).reshape(n, n)
     x[np.abs(x) < 1e-14] = 0.0  # entries that vanish analytically come out at rounding level
     return x
 
@@ -344,7 +344,7 @@ void main()
 
 def _diffuse_block0(order):
     """T_d's m = 0 block: (order, order), from the core's diffuse operator."""
-    dense = np.asarray(native.require().diffuse_operator(order), dtype=np.float64)
+    dense = np.asarray(native.require().sh.diffuse_operator(order), dtype=np.float64)
     zonal = [sh_index(l, 0) for l in range(order)]
     return dense[np.ix_(zonal, zonal)]
 
@@ -354,8 +354,8 @@ def _diffuse_block0(order):
 def operator_blocks(order, model, phong_exponent):
     """T's per-|m| blocks, flattened as sh::PoseShader lays them out (block a row-major)."""
     core = native.require()
-    dense = np.asarray(core.phong_operator(order, phong_exponent) if model == "phong"
-                       else core.diffuse_operator(order), dtype=np.float64)
+    dense = np.asarray(core.sh.phong_operator(order, phong_exponent) if model == "phong"
+                       else core.sh.diffuse_operator(order), dtype=np.float64)
     _, total = operator_block_layout(order)
     flat = np.zeros(total)
     at = 0

@@ -44,7 +44,7 @@ class _Loaded:
         self.path = path
         self.mtime = os.path.getmtime(path)
         try:
-            model = core.VisibilityPoseModel.load(path)
+            model = core.visibility.PoseModel.load(path)
         except OSError as error:  # damaged, truncated, not a model: the core says which
             raise VisibilityInputError(f"{error} — bake '{obj.name}' again to rewrite it") from None
         mesh = obj.data
@@ -63,7 +63,7 @@ class _Loaded:
                 f"model '{path}' was made for another armature: '{armature.name}' lacks {', '.join(missing[:5])}")
         self.model = model
         sizes, loops = scene_data.polygon_topology(mesh)
-        self.neighbours = core.visibility_reference_neighbours(len(mesh.vertices), sizes, loops)
+        self.neighbours = core.visibility.reference_neighbours(len(mesh.vertices), sizes, loops)
         # Arrays reused frame after frame (no per-frame allocation for the mesh
         # read or the attribute write); the triangles only repair zero-length
         # normals at run time, so the rest mesh's serve every frame.

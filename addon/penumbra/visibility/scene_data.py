@@ -52,7 +52,7 @@ def polygon_topology(mesh):
 
 def topology_hash(mesh):
     sizes, loops = polygon_topology(mesh)
-    return native.require().visibility_topology_hash(len(mesh.vertices), sizes, loops)
+    return native.require().visibility.topology_hash(len(mesh.vertices), sizes, loops)
 
 
 def _vertex_normals(mesh, out=None):
@@ -161,7 +161,7 @@ def evaluated_mesh(obj, depsgraph, with_topology=True, buffers=None):
         normals = _vertex_normals(mesh, buffers.normals_local if reuse else None)
         if with_topology:
             sizes, loops = polygon_topology(mesh)
-            topology = native.require().visibility_topology_hash(n, sizes, loops)
+            topology = native.require().visibility.topology_hash(n, sizes, loops)
         else:
             sizes = loops = topology = None
         # The bake needs Blender's own triangles of this pose (the occluding surface).
@@ -430,14 +430,14 @@ def world_lighting_checked(scene, order):
         if pixels.size == 0:
             raise VisibilityInputError(
                 f"the World's environment image '{image.name}' has no pixels: {_unreadable(image)}")
-        coefficients, stats = core.project_environment(order, pixels, with_stats=True)
+        coefficients, stats = core.sh.project_environment(order, pixels, with_stats=True)
         cached = coefficients, _pixel_warning(image, stats)
         _lighting_cache.clear()
         _lighting_cache[key] = cached
     coefficients, pixel_warning = cached
     rotation = r.rotation
     # The texture is looked up at R·d: L(d) = E(R d), so its SH are D(Rᵀ)·c.
-    lit = core.rotate_sh(coefficients, rotation.T) if not np.allclose(rotation, np.eye(3)) else coefficients
+    lit = core.sh.rotate(coefficients, rotation.T) if not np.allclose(rotation, np.eye(3)) else coefficients
     return np.asarray(lit) * r.strength, r.note, pixel_warning
 
 

@@ -10,7 +10,8 @@
 // subnormal, out of range), 8 positions to evaluate, then a lookup spec and
 // probes (colormap_common.hpp).
 // Checked: only penumbra::Error; an accepted ramp evaluates to finite values
-// where its colours are of ordinary size; lookups stay within the map's range.
+// where its colours are ordinary (see `ordinary`); lookups stay within the
+// map's range.
 #include "../colormap_common.hpp"
 #include "colormap/color_ramp.hpp"
 
@@ -28,13 +29,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const int channels = flags & 2 ? 4 : 3;
     const int stops = in.byte() % 35;
     const int dense_samples = in.in_range(0, 2048);
-    bool ordinary = true;  // every colour within ±1e6
+    // Colours for which evaluation must stay finite: RGB within ±1e6; HSV and
+    // HSL within [0, 1], because outside it Blender's rgb_to_hsl divides by
+    // zero (BKE_colorband_evaluate gives NaN there too; the colour map then
+    // refuses the ramp with an ArgumentError saying so).
+    const bool rgb = ramp.color_mode == RampColorMode::rgb;
+    bool ordinary = true;
     for (int i = 0; i < stops; ++i) {
         RampStop s;
         s.position = in.take<float>();
         for (auto& c : s.color) {
             c = in.take<float>();
-            ordinary = ordinary && std::fabs(c) <= 1e6f;
+            ordinary = ordinary && (rgb ? std::fabs(c) <= 1e6f : c >= 0.0f && c <= 1.0f);
         }
         ramp.stops.push_back(s);
     }

@@ -1,0 +1,241 @@
+// _penumbra.visibility.PoseModel and fit_model: the linear pose-space ZH
+// visibility model (core/visibility/pose_model.hpp), its file, and its run
+// time (pose -> lobes -> shading, core/visibility/runtime_shading.hpp).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <array>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "arrays.hpp"
+#include "bindings.hpp"
+#include "common/error.hpp"
+#include "progress.hpp"
+#include "sh/pose_shading.hpp"
+#include "visibility/model_file.hpp"
+#include "visibility/pose_model.hpp"
+#include "visibility/runtime_shading.hpp"
+
+namespace py = pybind11;
+namespace vis = penumbra::visibility;
+
+namespace penumbra::bindings {
+
+namespace {
+
+using Model = std::shared_ptr<vis::PoseModel>;
+
+py::dict errors_dict(const vis::Errors& e) {
+    py::dict d;
+    d["sh_rms"] = e.sh_rms;
+    d["ao_mean_abs"] = e.ao_mean_abs;
+    d["ao_max_abs"] = e.ao_max_abs;
+    d["samples"] = e.samples;
+    return d;
+}
+
+// One PoseShader per SH order for the whole process: building one costs
+// microseconds at order 4 and ~0.2 ms at order 8, and it caches the Phong
+// operators of the exponents it has seen. PoseShader::shade is thread-safe,
+// so the shared instance may serve concurrent calls. Taken with the GIL
+// released: the mutex is only held to look up or build the shader, never
+// while Python runs.
+std::shared_ptr<const sh::PoseShader> shader_for(int order) {
+    static std::mutex mutex;
+    static std::array<std::shared_ptr<const sh::PoseShader>, 9> shaders;
+    if (order < 1 || order > 8) throw penumbra::ArgumentError("SH order must be in [1, 8]");
+    std::lock_guard<std::mutex> lock(mutex);
+    auto& slot = shaders[std::size_t(order)];
+    if (!slot) slot = std::make_shared<const sh::PoseShader>(order);
+    return slot;
+}
+
+py::tuple synthesize(const vis::PoseModel& x, const Floats& joint_rotations, int threads) {
+    const auto r = rotations(joint_rotations, x.joints.size(), "joint_rotations");
+    const std::size_t V = x.vertex_count;
+    std::vector<float> params(V * x.params_per_vertex()), axes(V * x.lobes * 3), bands(V * x.lobes * x.order);
+    {
+        py::gil_scoped_release release;
+        vis::synthesize_lobes(x, r.data(), params.data(), axes.data(), bands.data(), threads);
+    }
+    return py::make_tuple(to_array(axes, {py::ssize_t(V), x.lobes, 3}),
+                          to_array(bands, {py::ssize_t(V), x.lobes, x.order}),
+                          to_array(params, {py::ssize_t(V), x.lobes, vis::params_per_lobe(x.order)}));
+}
+
+py::tuple shade(const vis::PoseModel& x, const Floats& joint_rotations, const Floats& positions,
+                const Floats& normals, const Indices& triangles, const Indices& neighbours, const Doubles& lighting,
+                sh::ShadingModel model, double phong_exponent, const std::array<double, 3>& camera,
+                const std::array<double, 3>& transmission, int threads) {
+    const auto r = rotations(joint_rotations, x.joints.size(), "joint_rotations");
+    const auto p = triples(positions, "positions"), n = triples(normals, "normals");
+    const auto t = indices(triangles, "triangles", true), nb = indices(neighbours, "neighbours", false);
+    const py::ssize_t n_sh = py::ssize_t(x.order) * x.order;
+    if (lighting.ndim() != 2 || lighting.shape(0) != n_sh || lighting.shape(1) != 3)
+        throw py::value_error("lighting must have shape (" + std::to_string(n_sh) + ", 3), got " + shape_of(lighting));
+    Eigen::MatrixXd l(n_sh, 3);
+    for (py::ssize_t i = 0; i < n_sh; ++i)
+        for (int c = 0; c < 3; ++c) l(i, c) = lighting.at(i, c);
+    sh::ShadingParameters sp;
+    sp.model = model;
+    sp.phong_exponent = phong_exponent;
+    sp.camera = Eigen::Vector3d(camera[0], camera[1], camera[2]);
+    sp.transmission = transmission;
+    sp.threads = threads;
+    vis::RuntimeResult result;
+    {
+        py::gil_scoped_release release;
+        const auto shader = shader_for(x.order);
+        result = vis::shade_pose(x, *shader, r.data(), p, n, t, nb, l, sp);
+    }
+    py::dict info;
+    info["seconds_pose_to_lobes"] = result.timings.pose_to_lobes;
+    info["seconds_frames"] = result.timings.frames;
+    info["seconds_shading"] = result.timings.shading;
+    info["invalid_vertices"] = result.stats.invalid_vertices;
+    info["repaired_normals"] = result.frame_stats.repaired_normals;
+    return py::make_tuple(to_array(result.rgb, {py::ssize_t(x.vertex_count), 3}),
+                          to_array(result.visibility, {py::ssize_t(x.vertex_count)}), info);
+}
+
+void bind_properties(py::class_<vis::PoseModel, Model>& c) {
+    c.def_property_readonly("order", [](const vis::PoseModel& x) { return x.order; })
+        .def_property_readonly("lobes", [](const vis::PoseModel& x) { return x.lobes; })
+        .def_property_readonly("rays", [](const vis::PoseModel& x) { return x.rays; })
+        .def_property_readonly("below_horizon", [](const vis::PoseModel& x) { return x.below_horizon; })
+        .def_property_readonly("features", [](const vis::PoseModel& x) { return x.features; })
+        .def_property_readonly("vertex_count", [](const vis::PoseModel& x) { return x.vertex_count; })
+        .def_property_readonly("topology_hash", [](const vis::PoseModel& x) { return x.topology_hash; })
+        .def_property_readonly("joints", [](const vis::PoseModel& x) { return x.joints; })
+        .def_property_readonly("armature_bones", [](const vis::PoseModel& x) { return x.armature_bones; })
+        .def_property_readonly("summary", [](const vis::PoseModel& x) {
+            py::dict d;
+            for (const auto& [k, v] : x.summary) d[py::str(k)] = v;
+            return d;
+        })
+        .def_property_readonly("constant_vertices", [](const vis::PoseModel& x) {
+            std::size_t n = 0;
+            for (std::size_t v = 0; v < x.vertex_count; ++v) n += x.joint_offsets[v] == x.joint_offsets[v + 1];
+            return n;
+        })
+        .def("joints_per_vertex", [](const vis::PoseModel& x) {
+            std::vector<std::uint32_t> n(x.vertex_count);
+            for (std::size_t v = 0; v < x.vertex_count; ++v) n[v] = x.joint_offsets[v + 1] - x.joint_offsets[v];
+            return to_array(n, {py::ssize_t(n.size())});
+        });
+}
+
+void bind_pose_model(py::module_& m) {
+    const vis::BakeSettings bake;            // every default below is the core's own
+    const sh::ShadingParameters shading;
+    py::class_<vis::PoseModel, Model> c(m, "PoseModel",
+        "The linear pose-space ZH visibility model of one mesh and armature.");
+    c.def_static("load", [](const std::string& path) {
+        py::gil_scoped_release release;
+        return std::make_shared<vis::PoseModel>(vis::read_pose_model(path));
+    }, py::arg("path"), "Reads a .pzh file; a missing, truncated or corrupted file raises IoError.")
+        .def("save", [](const vis::PoseModel& model, const std::string& path) {
+            py::gil_scoped_release release;
+            vis::write_pose_model(path, model);
+        }, py::arg("path"), "Writes the model atomically.");
+    bind_properties(c);
+    c.def("synthesize", &synthesize, py::arg("joint_rotations"), py::arg("threads") = bake.threads,
+          "Paper §4.3 step 1: lobes for a pose. joint_rotations (J, 3, 3) in `joints` order. Returns "
+          "(axes (V, c, 3) local, bands (V, c, order), params (V, c, 2 + order)).");
+    c.def("evaluate", [](const vis::PoseModel& x, const vis::TrainingSet& s, int threads) {
+        vis::Errors e;
+        {
+            py::gil_scoped_release release;
+            e = vis::evaluate_pose_model(x, s, threads);
+        }
+        return errors_dict(e);
+    }, py::arg("frames"), py::arg("threads") = bake.threads,
+       "Errors of the model against baked frames (poses it may never have seen).");
+    c.def("shade", &shade, py::arg("joint_rotations"), py::arg("positions"), py::arg("normals"), py::arg("triangles"),
+          py::arg("neighbours"), py::arg("lighting"), py::arg("model") = shading.model,
+          py::arg("phong_exponent") = shading.phong_exponent,
+          py::arg("camera") = std::array<double, 3>{shading.camera[0], shading.camera[1], shading.camera[2]},
+          py::arg("transmission") = shading.transmission, py::arg("threads") = bake.threads,
+          "The whole run time for one pose: lobes from the pose, frames from the deformed mesh, shading with the SH "
+          "engine under lighting (order², 3) with `model` (sh.ShadingModel, or its name). Returns (rgb (V, 3) "
+          "float32, ao (V,) float32, info with timings).");
+}
+
+py::dict report_dict(const vis::FitReport& report) {
+    py::dict r;
+    py::list joints;
+    for (const auto& j : report.joints) {
+        py::dict d;
+        d["name"] = j.name;
+        d["active"] = j.active;
+        d["max_angle_degrees"] = j.max_angle_degrees;
+        d["reason"] = j.reason;
+        joints.append(d);
+    }
+    r["joints"] = joints;
+    r["training_frames"] = report.training_frames;
+    r["holdout_frames"] = report.holdout_frames;
+    r["zh_fit"] = errors_dict(report.zh_fit);
+    r["model_training"] = errors_dict(report.model_training);
+    r["model_holdout"] = errors_dict(report.model_holdout);
+    r["model_holdout_unpruned"] = errors_dict(report.model_holdout_unpruned);
+    r["ridge_relative"] = report.ridge_relative;
+    r["ridge_curve"] = report.ridge_curve;
+    r["constant_vertices"] = report.constant_vertices;
+    r["stored_joint_blocks"] = report.stored_joint_blocks;
+    r["model_bytes"] = report.model_bytes;
+    r["dense_bytes"] = report.dense_bytes;
+    r["seconds_zh_fit"] = report.seconds_zh_fit;
+    r["seconds_linear"] = report.seconds_linear;
+    return r;
+}
+
+py::tuple fit_model(const vis::TrainingSet& set, const std::vector<std::pair<bool, bool>>& influence, int lobes,
+                    vis::PoseFeatures features, double joint_tolerance_degrees, int holdout_stride,
+                    double constant_tolerance, double prune_tolerance, int zh_iterations, double axis_prior,
+                    int threads, py::object progress) {
+    vis::FitSettings s;
+    s.lobes = lobes;
+    s.features = features;
+    s.joint_tolerance_degrees = joint_tolerance_degrees;
+    s.holdout_stride = holdout_stride;
+    s.constant_tolerance = constant_tolerance;
+    s.prune_tolerance = prune_tolerance;
+    s.zh_iterations = zh_iterations;
+    s.axis_prior = axis_prior;
+    s.threads = threads;
+    std::vector<vis::BoneInfluence> inf;
+    for (const auto& [deforms, rigid] : influence) inf.push_back({deforms, rigid});
+    PyProgress py_progress(progress);
+    vis::FitReport report;
+    Model model;
+    try {
+        py::gil_scoped_release release;
+        model = std::make_shared<vis::PoseModel>(vis::fit_pose_model(set, inf, s, py_progress.progress(), &report));
+    } catch (const penumbra::Cancelled&) {
+        py_progress.rethrow_if_failed();
+        throw;
+    }
+    py_progress.rethrow_if_failed();
+    return py::make_tuple(model, report_dict(report));
+}
+
+}  // namespace
+
+void bind_visibility_model(py::module_& m) {
+    bind_pose_model(m);
+    const vis::FitSettings fit;  // every default below is the core's own
+    m.def("fit_model", &fit_model, py::arg("training_set"), py::arg("bone_influence"), py::arg("lobes") = fit.lobes,
+          py::arg("features") = fit.features, py::arg("joint_tolerance_degrees") = fit.joint_tolerance_degrees,
+          py::arg("holdout_stride") = fit.holdout_stride, py::arg("constant_tolerance") = fit.constant_tolerance,
+          py::arg("prune_tolerance") = fit.prune_tolerance, py::arg("zh_iterations") = fit.zh_iterations,
+          py::arg("axis_prior") = fit.axis_prior, py::arg("threads") = fit.threads, py::arg("progress") = py::none(),
+          "Fits ZH lobes per vertex and frame and the linear pose model (paper §3.1). bone_influence: one "
+          "(deforms_mesh, rigid_for_whole_mesh) pair per bone of the training set. Returns (model, report).");
+}
+
+}  // namespace penumbra::bindings
