@@ -66,7 +66,7 @@ PY_ASAN_ENV := LD_PRELOAD="$$(g++ -print-file-name=libasan.so) $$(g++ -print-fil
 #   test_gpu_preview_in_blender.py: runs Blenders, which load the Release add-on;
 #   test_only_the_module_init_symbol_is_exported: wants all three modules,
 #     the sanitizer build makes the 3.11 one only.
-PY_ASAN_SKIP := --ignore=tests/python/test_package.py --ignore=tests/python/test_gpu_preview_in_blender.py \
+PY_ASAN_SKIP := --ignore=tests/python/test_package.py --ignore=tests/python/visibility/test_gpu_preview_in_blender.py \
   --deselect tests/python/test_module.py::test_only_the_module_init_symbol_is_exported
 
 $(ASAN_BUILD)/CMakeCache.txt:

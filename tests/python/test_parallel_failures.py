@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import _penumbra as p
-from test_visibility import bake, two_sphere_character
+from visibility_scenes import bake, two_sphere_character
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "scripts"))
 import lights_make_test_videos as videos  # noqa: E402

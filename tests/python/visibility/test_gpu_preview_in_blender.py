@@ -12,7 +12,7 @@ import os
 import shutil
 import subprocess
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 CHECK = os.path.join(ROOT, "tests", "blender", "gpu_preview_check.py")
 # The goal: GPU and CPU shading of a vertex differ by at most this (absolute,
 # scene-linear; measured ~1e-5, float rounding).

@@ -12,7 +12,7 @@ import pytest
 
 import _penumbra
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import lights_make_test_videos as videos  # noqa: E402
 from lights_median_cut import median_cut  # noqa: E402
