@@ -210,43 +210,58 @@ def footprint_group():
                                    ("Major", "NodeSocketFloat"), ("Axis U", "NodeSocketVector"),
                                    ("Axis V", "NodeSocketVector"), ("Centre Offset", "NodeSocketVector")])
     b = _Builder(group)
-    camera = b.nodes.new("ShaderNodeCameraData")
     geometry = b.nodes.new("ShaderNodeNewGeometry")
+    to_point, forward, right, up = _camera_frame(b, geometry)
+    ju, jv = _footprint_jacobian(b, gin, geometry, to_point, forward, right, up)
+    _footprint_ellipse(b, ju, jv, gout)
+    _centre_offset(b, gin, gout, geometry, forward, right, up, ju, jv)
+    return group
 
-    def camera_transform(vector, kind="VECTOR"):
-        node = b._place(b.nodes.new("ShaderNodeVectorTransform"))
-        node.vector_type = kind
-        node.convert_from = "CAMERA"
-        node.convert_to = "WORLD"
-        node.inputs[0].default_value = vector
-        return node.outputs[0]
 
-    def camera_axis(axis):
-        return b.vmath("NORMALIZE", camera_transform(axis))
+def _camera_transform(b, vector, kind="VECTOR"):
+    node = b._place(b.nodes.new("ShaderNodeVectorTransform"))
+    node.vector_type = kind
+    node.convert_from = "CAMERA"
+    node.convert_to = "WORLD"
+    node.inputs[0].default_value = vector
+    return node.outputs[0]
 
+
+def _camera_frame(b, geometry):
+    """The unit vector camera -> point, and the camera's forward, right and up
+    axes in world space, forward's sign fixed by F·(−Incoming) > 0 whatever
+    the renderer's camera convention."""
     to_point = b.vscale(geometry.outputs["Incoming"], -1.0)      # unit vector camera -> point
-    f_axis = camera_axis((0.0, 0.0, 1.0))
+    f_axis = b.vmath("NORMALIZE", _camera_transform(b, (0.0, 0.0, 1.0)))
     forward = b.vscale(f_axis, b.math("SIGN", b.vmath("DOT_PRODUCT", f_axis, to_point)))
-    x_axis = camera_axis((1.0, 0.0, 0.0))
+    x_axis = b.vmath("NORMALIZE", _camera_transform(b, (1.0, 0.0, 0.0)))
     right = b.vmath("NORMALIZE", b.vmath("SUBTRACT", x_axis,
                                          b.vscale(forward, b.vmath("DOT_PRODUCT", x_axis, forward))))
-    up = b.vmath("CROSS_PRODUCT", forward, right)
+    return to_point, forward, right, b.vmath("CROSS_PRODUCT", forward, right)
+
+
+def _footprint_jacobian(b, gin, geometry, to_point, forward, right, up):
+    """J_u, J_v: the world-space steps of the surface point per pixel."""
+    camera = b.nodes.new("ShaderNodeCameraData")
     cos_beta = b.math("MAXIMUM", b.vmath("DOT_PRODUCT", to_point, forward), 1e-6)
     ray = b.vscale(to_point, b.math("DIVIDE", 1.0, cos_beta))
     normal = geometry.outputs["Normal"]
     ray_n = b.vmath("DOT_PRODUCT", ray, normal)
     inv_ray_n = b.math("DIVIDE", ray_n, b.math("MAXIMUM", b.math("MULTIPLY", ray_n, ray_n), 1e-12))
     ortho = gin.outputs["Orthographic"]
-    perspective = b.math("SUBTRACT", 1.0, ortho)
-    pixel = gin.outputs["Pixel Size"]
-    width = b.math("MULTIPLY", pixel,
-                   b.math("ADD", b.math("MULTIPLY", camera.outputs["View Z Depth"], perspective), ortho))
+    width = b.math("MULTIPLY", gin.outputs["Pixel Size"],
+                   b.math("ADD", b.math("MULTIPLY", camera.outputs["View Z Depth"], b.math("SUBTRACT", 1.0, ortho)),
+                          ortho))
 
     def column(axis):
         k = b.math("MULTIPLY", b.vmath("DOT_PRODUCT", axis, normal), inv_ray_n)
         return b.vscale(b.vmath("SUBTRACT", axis, b.vscale(ray, k)), width)
 
-    ju, jv = column(right), column(up)
+    return column(right), column(up)
+
+
+def _footprint_ellipse(b, ju, jv, gout):
+    """Footprint (sqrt of the area), Major and Minor (J's singular values), Axis U/V."""
     a = b.vmath("DOT_PRODUCT", ju, ju)
     c = b.vmath("DOT_PRODUCT", jv, jv)
     area = b.vmath("LENGTH", b.vmath("CROSS_PRODUCT", ju, jv))
@@ -260,10 +275,17 @@ def footprint_group():
     b.links.new(ju, gout.inputs["Axis U"])
     b.links.new(jv, gout.inputs["Axis V"])
 
-    # The pixel centre: image-plane coordinates in pixels (perspective: the
-    # ray's slope over the pixel size at unit depth; orthographic: the
-    # offset from the camera over the pixel size), snapped to the centre.
-    origin = camera_transform((0.0, 0.0, 0.0), "POINT")
+
+def _centre_offset(b, gin, gout, geometry, forward, right, up, ju, jv):
+    """Centre Offset: where the ray through the pixel's centre meets the
+    tangent plane, minus P. The pixel centre: image-plane coordinates in
+    pixels (perspective: the ray's slope over the pixel size at unit depth;
+    orthographic: the offset from the camera over the pixel size), snapped."""
+    ortho = gin.outputs["Orthographic"]
+    perspective = b.math("SUBTRACT", 1.0, ortho)
+    pixel = gin.outputs["Pixel Size"]
+    normal = geometry.outputs["Normal"]
+    origin = _camera_transform(b, (0.0, 0.0, 0.0), "POINT")
     position = geometry.outputs["Position"]
     relative = b.vmath("SUBTRACT", position, origin)
     inv_pixel = b.math("DIVIDE", 1.0, b.math("MAXIMUM", pixel, 1e-30))
@@ -290,7 +312,6 @@ def footprint_group():
     reach = b.math("MULTIPLY", b.math("ADD", b.vmath("LENGTH", ju), b.vmath("LENGTH", jv)), 2.0)
     near = b.math("LESS_THAN", b.vmath("LENGTH", offset), reach)
     b.links.new(b.vscale(offset, b.math("MULTIPLY", in_front, near)), gout.inputs["Centre Offset"])
-    return group
 
 
 def noise_filter_group(octave_image, table, weights, lacunarity, filter_stddev_px):
@@ -331,31 +352,67 @@ def noise_filter_group(octave_image, table, weights, lacunarity, filter_stddev_p
                                   [("Mean", "NodeSocketFloat"), ("Sigma", "NodeSocketFloat")])
     group["penumbra_octave_weights"] = list(weights)
     b = _Builder(group)
-    logs, elongations = table["log2_footprint"], table["log2_elongation"]
+    log2_s, v = _footprint_table_coordinates(b, gin, table, filter_stddev_px)
+    taps = _pixel_taps(b, gin, filter_stddev_px)
+    tap_floor = 1.0 / len(taps)   # variance of the tap average of uncorrelated taps
+    mean = 0.5
+    variance = 0.0
+    tap_sums = [0.0] * len(taps)   # Σ_i w_i g_i (Fac_i(tap) − 0.5) per tap
+    for i, w in enumerate(weights):
+        values = _octave_taps(b, taps, b.math("MULTIPLY", gin.outputs["Scale"], lacunarity ** i))
+        total = values[0]
+        for value in values[1:]:
+            total = b.math("ADD", total, value)
+        average = b.math("MULTIPLY", total, 1.0 / len(taps))
+        logs = table["log2_footprint"]
+        u = b.texel(b.math("MULTIPLY_ADD", log2_s, 1.0 / (logs[-1] - logs[0]),
+                           (i * math.log2(lacunarity) - logs[0]) / (logs[-1] - logs[0])), len(logs))
+        q, _, _ = b.separate(b.image(octave_image, b.combine(u, v)).outputs["Color"])
+        kept = b.math("SUBTRACT", 1.0, q)
+        tap_error = b.math("MULTIPLY", b.math("MULTIPLY", q, q), tap_floor)
+        g = b.math("DIVIDE", kept, b.math("MAXIMUM", b.math("ADD", kept, tap_error), 1e-9))
+        wg = b.math("MULTIPLY", g, w)
+        mean = b.math("MULTIPLY_ADD", b.math("SUBTRACT", average, 0.5), wg, mean)
+        for t, value in enumerate(values):
+            tap_sums[t] = b.math("MULTIPLY_ADD", b.math("SUBTRACT", value, 0.5), wg, tap_sums[t])
+        # Not seen by the taps' spread: q − g² q (1 − q/N) (the expected spread
+        # of N taps), plus the uncertainty of the mean (1 − q) e/(1 − q + e).
+        captured = b.math("MULTIPLY", b.math("MULTIPLY", g, g),
+                          b.math("MULTIPLY", q, b.math("MULTIPLY_ADD", q, -1.0 / len(taps), 1.0)))
+        term = b.math("ADD", b.math("MAXIMUM", b.math("SUBTRACT", q, captured), 0.0),
+                      b.math("MULTIPLY", g, tap_error))
+        variance = b.math("MULTIPLY_ADD", term, table["total_var"] * w * w, variance)
+    variance = b.math("ADD", variance, _tap_spread(b, tap_sums))
+    b.connect(mean, gout.inputs["Mean"])
+    b.links.new(b.math("SQRT", b.math("MAXIMUM", variance, 0.0)), gout.inputs["Sigma"])
+    return group
+
+
+def _footprint_table_coordinates(b, gin, table, filter_stddev_px):
+    """log2 s (the footprint's minor standard deviation in noise units) and
+    the octave table's v coordinate of the footprint's elongation."""
+    elongations = table["log2_elongation"]
     minor = b.math("MAXIMUM", gin.outputs["Minor"], 1e-12)
     s = b.math("MULTIPLY", b.math("MULTIPLY", minor, gin.outputs["Scale"]),
                b.math("MULTIPLY", gin.outputs["Units per World"], filter_stddev_px))
     log2_s = b.math("LOGARITHM", b.math("MAXIMUM", s, 1e-12), 2.0)
     log2_e = b.math("LOGARITHM", b.math("MAXIMUM", b.math("DIVIDE", gin.outputs["Major"], minor), 1.0), 2.0)
     v = b.texel(b.math("MINIMUM", b.math("MULTIPLY", log2_e, 1.0 / elongations[-1]), 1.0), len(elongations))
+    return log2_s, v
 
-    # World offsets -> the noise's coordinates: directions by the object's
-    # inverse transform, lengths by Units per World.
-    def to_object(vector):
-        node = b._place(b.nodes.new("ShaderNodeVectorTransform"))
-        node.vector_type = "VECTOR"
-        node.convert_from = "WORLD"
-        node.convert_to = "OBJECT"
-        b.links.new(vector, node.inputs[0])
-        return node.outputs[0]
 
-    axis_u, axis_v = gin.outputs["Axis U"], gin.outputs["Axis V"]
-    ref = b.vmath("ADD", axis_u, axis_v)
-    ref_object = to_object(ref)
-    k = b.math("DIVIDE", b.math("MULTIPLY", b.vmath("LENGTH", ref), gin.outputs["Units per World"]),
-               b.math("MAXIMUM", b.vmath("LENGTH", ref_object), 1e-30))
-    # Principal axes of the footprint: p1 = the unit pixel-space direction J
-    # stretches most (eigenvector of JᵀJ = [[a, h], [h, c]]), p2 ⟂ p1.
+def _world_to_object(b, vector):
+    node = b._place(b.nodes.new("ShaderNodeVectorTransform"))
+    node.vector_type = "VECTOR"
+    node.convert_from = "WORLD"
+    node.convert_to = "OBJECT"
+    b.links.new(vector, node.inputs[0])
+    return node.outputs[0]
+
+
+def _footprint_principal_axes(b, axis_u, axis_v):
+    """p1 = the unit pixel-space direction J stretches most (eigenvector of
+    JᵀJ = [[a, h], [h, c]]), p2 ⟂ p1; returned as world vectors J p1, J p2."""
     a = b.vmath("DOT_PRODUCT", axis_u, axis_u)
     c = b.vmath("DOT_PRODUCT", axis_v, axis_v)
     h = b.vmath("DOT_PRODUCT", axis_u, axis_v)
@@ -373,57 +430,50 @@ def noise_filter_group(octave_image, table, weights, lacunarity, filter_stddev_p
     x1, y1 = b.math("MULTIPLY", x1, norm), b.math("MULTIPLY", y1, norm)
     major_axis = b.vmath("ADD", b.vscale(axis_u, x1), b.vscale(axis_v, y1))
     minor_axis = b.vmath("SUBTRACT", b.vscale(axis_v, x1), b.vscale(axis_u, y1))
-    km = b.vscale(to_object(major_axis), b.math("MULTIPLY", k, filter_stddev_px))
-    kn = b.vscale(to_object(minor_axis), b.math("MULTIPLY", k, filter_stddev_px))
-    base = b.vmath("ADD", gin.outputs["Vector"], b.vscale(to_object(gin.outputs["Centre Offset"]), k))
+    return major_axis, minor_axis
+
+
+def _pixel_taps(b, gin, filter_stddev_px):
+    """The 16 tap positions in the noise's coordinates, P + Centre Offset +
+    κ(n·m + t·M): world offsets taken there by the object's inverse
+    transform (directions) and Units per World (lengths)."""
+    axis_u, axis_v = gin.outputs["Axis U"], gin.outputs["Axis V"]
+    ref = b.vmath("ADD", axis_u, axis_v)
+    k = b.math("DIVIDE", b.math("MULTIPLY", b.vmath("LENGTH", ref), gin.outputs["Units per World"]),
+               b.math("MAXIMUM", b.vmath("LENGTH", _world_to_object(b, ref)), 1e-30))
+    major_axis, minor_axis = _footprint_principal_axes(b, axis_u, axis_v)
+    km = b.vscale(_world_to_object(b, major_axis), b.math("MULTIPLY", k, filter_stddev_px))
+    kn = b.vscale(_world_to_object(b, minor_axis), b.math("MULTIPLY", k, filter_stddev_px))
+    base = b.vmath("ADD", gin.outputs["Vector"], b.vscale(_world_to_object(b, gin.outputs["Centre Offset"]), k))
     taps = []
     for side in (-1.0, 1.0):
         row = b.vmath("ADD", base, b.vscale(kn, side))
         for t in MAJOR_TAPS:
             taps.append(b.vmath("ADD", row, b.vscale(km, t)))
-    tap_floor = 1.0 / len(taps)   # variance of the tap average of uncorrelated taps
-    mean = 0.5
-    variance = 0.0
-    tap_sums = [0.0] * len(taps)   # Σ_i w_i g_i (Fac_i(tap) − 0.5) per tap
-    for i, w in enumerate(weights):
-        scale = b.math("MULTIPLY", gin.outputs["Scale"], lacunarity ** i)
-        total = None
-        values = []
-        for tap in taps:
-            noise = b._place(b.nodes.new("ShaderNodeTexNoise"))
-            noise.noise_dimensions = "3D"
-            if hasattr(noise, "normalize"):
-                noise.normalize = True
-            if hasattr(noise, "noise_type"):
-                noise.noise_type = "FBM"
-            noise.inputs["Detail"].default_value = 0.0
-            noise.inputs["Distortion"].default_value = 0.0
-            b.links.new(tap, noise.inputs["Vector"])
-            b.connect(scale, noise.inputs["Scale"])
-            values.append(noise.outputs["Fac"])
-            total = noise.outputs["Fac"] if total is None else b.math("ADD", total, noise.outputs["Fac"])
-        average = b.math("MULTIPLY", total, 1.0 / len(taps))
-        shift = i * math.log2(lacunarity)
-        u = b.texel(b.math("MULTIPLY_ADD", log2_s, 1.0 / (logs[-1] - logs[0]),
-                           (shift - logs[0]) / (logs[-1] - logs[0])), len(logs))
-        q, _, _ = b.separate(b.image(octave_image, b.combine(u, v)).outputs["Color"])
-        kept = b.math("SUBTRACT", 1.0, q)
-        tap_error = b.math("MULTIPLY", b.math("MULTIPLY", q, q), tap_floor)
-        denominator = b.math("MAXIMUM", b.math("ADD", kept, tap_error), 1e-9)
-        g = b.math("DIVIDE", kept, denominator)
-        wg = b.math("MULTIPLY", g, w)
-        mean = b.math("MULTIPLY_ADD", b.math("SUBTRACT", average, 0.5), wg, mean)
-        for t, value in enumerate(values):
-            tap_sums[t] = b.math("MULTIPLY_ADD", b.math("SUBTRACT", value, 0.5), wg, tap_sums[t])
-        # Not seen by the taps' spread: q − g² q (1 − q/N) (the expected spread
-        # of N taps), plus the uncertainty of the mean (1 − q) e/(1 − q + e).
-        captured = b.math("MULTIPLY", b.math("MULTIPLY", g, g),
-                          b.math("MULTIPLY", q, b.math("MULTIPLY_ADD", q, -1.0 / len(taps), 1.0)))
-        term = b.math("ADD", b.math("MAXIMUM", b.math("SUBTRACT", q, captured), 0.0),
-                      b.math("MULTIPLY", g, tap_error))
-        variance = b.math("MULTIPLY_ADD", term, table["total_var"] * w * w, variance)
-    # The spread of the weighted taps: the local within-pixel variance of the
-    # octaves the mean keeps (exact for a field linear across the pixel).
+    return taps
+
+
+def _octave_taps(b, taps, scale):
+    """One octave (a Noise Texture at Detail 0) at every tap: its Fac outputs."""
+    values = []
+    for tap in taps:
+        noise = b._place(b.nodes.new("ShaderNodeTexNoise"))
+        noise.noise_dimensions = "3D"
+        if hasattr(noise, "normalize"):
+            noise.normalize = True
+        if hasattr(noise, "noise_type"):
+            noise.noise_type = "FBM"
+        noise.inputs["Detail"].default_value = 0.0
+        noise.inputs["Distortion"].default_value = 0.0
+        b.links.new(tap, noise.inputs["Vector"])
+        b.connect(scale, noise.inputs["Scale"])
+        values.append(noise.outputs["Fac"])
+    return values
+
+
+def _tap_spread(b, tap_sums):
+    """The spread of the weighted taps, the local within-pixel variance of the
+    octaves the mean keeps (exact for a field linear across the pixel)."""
     tap_mean = 0.0
     tap_square = 0.0
     for value in tap_sums:
@@ -432,10 +482,7 @@ def noise_filter_group(octave_image, table, weights, lacunarity, filter_stddev_p
     tap_mean = b.math("MULTIPLY", tap_mean, 1.0 / len(tap_sums))
     spread = b.math("SUBTRACT", b.math("MULTIPLY", tap_square, 1.0 / len(tap_sums)),
                     b.math("MULTIPLY", tap_mean, tap_mean))
-    variance = b.math("ADD", variance, b.math("MAXIMUM", spread, 0.0))
-    b.connect(mean, gout.inputs["Mean"])
-    b.links.new(b.math("SQRT", b.math("MAXIMUM", variance, 0.0)), gout.inputs["Sigma"])
-    return group
+    return b.math("MAXIMUM", spread, 0.0)
 
 
 def microsurface_image(folder=None):

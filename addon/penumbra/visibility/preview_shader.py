@@ -191,19 +191,106 @@ def uniform_block_source(order):
             f"}};\n")
 
 
+# main()'s fixed parts. The vertex frame: n, then t Gram–Schmidt'ed against
+# it (a tangent within 1e-6 rad of n is unusable).
+_FRAME_GLSL = [
+    "  vec3 n = p_normal, t = p_tangent;",
+    "  float nn = dot(n, n);",
+    "  bool n_ok = finite3(n) && nn > 0.0 && !isinf(nn);",
+    "  n = n_ok ? n * inversesqrt(n_ok ? nn : 1.0) : vec3(0.0, 0.0, 1.0);",
+    "  float tt = dot(t, t);",
+    "  bool t_ok = finite3(t) && tt > 0.0 && !isinf(tt);",
+    "  t = t_ok ? t * inversesqrt(t_ok ? tt : 1.0) : vec3(1.0, 0.0, 0.0);",
+    "  t -= dot(t, n) * n;",
+    "  tt = dot(t, t);",
+    "  valid = n_ok && t_ok && tt > 1e-12;",
+    "  t = valid ? t * inversesqrt(valid ? tt : 1.0) : vec3(1.0, 0.0, 0.0);",
+    "  n = valid ? n : vec3(0.0, 0.0, 1.0);",
+    "  vec3 b = cross(n, t);",
+    "  vec3 zp = n;",
+]
+# Phong's lobe axis z' = r = 2(n·w) n − w, w towards the camera; clamped to
+# the horizon behind the surface.
+_PHONG_AXIS_GLSL = [
+    "  vec3 w = shading.camera.xyz - p_position;",
+    "  bool position_ok = finite3(w);",
+    "  valid = valid && position_ok;",
+    "  float ww = dot(w, w);",
+    "  bool has_view = position_ok && ww > 0.0 && !isinf(ww);",
+    "  w = has_view ? w * inversesqrt(has_view ? ww : 1.0) : n;",
+    "  float cosine = dot(n, w);",
+    "  vec3 h = w - cosine * n;",
+    "  float hh = dot(h, h);",
+    "  bool horizon = hh > 1e-24;",
+    "  h = horizon ? h * inversesqrt(horizon ? hh : 1.0) : n;",
+    "  vec3 r = 2.0 * cosine * n - w;",
+    "  r = cosine < 0.0 ? (horizon ? -h : n) : r;",
+    "  float rr = dot(r, r);",
+    "  r = rr > 0.0 ? r * inversesqrt(rr > 0.0 ? rr : 1.0) : n;",
+    "  zp = has_view ? r : n;",
+]
+# F' = Rz(φ) Ry(θ), F' e_z = z'; at the poles φ is free (0). Then the locals.
+_ROTATION_GLSL = [
+    "  float ct = zp.z, st = sqrt(zp.x * zp.x + zp.y * zp.y);",
+    "  bool pole = !(st > 0.0);",
+    "  float cp = pole ? 1.0 : zp.x / st, sp = pole ? 0.0 : zp.y / st;",
+    "  vec3 e1 = vec3(cp * ct, sp * ct, -st), e2 = vec3(-sp, cp, 0.0), e3 = vec3(cp * st, sp * st, ct);",
+    "  mat3 frame = mat3(t, b, n);",
+    "  float v[NC], y[NC], u[NC];",
+    "  for (int i = 0; i < NC; i++) { v[i] = 0.0; }",
+    "  float normal_zonal[ORDER], p[ORDER];",
+    "  for (int l = 0; l < ORDER; l++) { normal_zonal[l] = 0.0; }",
+    "  vec3 a;",
+    "  float g[ORDER];",
+    "  bool bands_finite, bands_zero, axis_ok, use;",
+    "  float aa;",
+]
+# A lobe's checks: a zero axis with zero bands is an unused lobe; anything
+# else zero or non-finite makes the vertex invalid.
+_LOBE_CHECK_GLSL = [
+    "  bands_finite = true; bands_zero = true;",
+    "  for (int l = 0; l < ORDER; l++) {",
+    "    bands_finite = bands_finite && !isnan(g[l]) && !isinf(g[l]);",
+    "    bands_zero = bands_zero && g[l] == 0.0;",
+    "  }",
+    "  aa = dot(a, a);",
+    "  axis_ok = finite3(a) && aa > 0.0 && !isinf(aa);",
+    "  a = axis_ok ? a * inversesqrt(axis_ok ? aa : 1.0) : vec3(0.0, 0.0, 1.0);",
+    "  valid = valid && bands_finite && (axis_ok || bands_zero);",
+    "  use = axis_ok && bands_finite && valid;",
+    "  for (int l = 0; l < ORDER; l++) { g[l] = use ? g[l] : 0.0; }",
+    "  sh_eval(vec3(dot(e1, frame * a), dot(e2, frame * a), dot(e3, frame * a)), y);",
+]
+# Step 4: u = T v. Step 5: back to world, D(F') = Dz(φ) Xᵀ Dz(θ) X, then the
+# dot with the lighting.
+_TO_WORLD_GLSL = [
+    "  apply_operator(v, u);",
+    "  quarter_turn(u, y);",
+    "  rotate_z(ct, st, y);",
+    "  quarter_turn_t(y, u);",
+    "  rotate_z(cp, sp, u);",
+    "  vec3 rgb = vec3(0.0);",
+    "  for (int i = 0; i < NC; i++) { rgb += shading.lighting[i].rgb * u[i]; }",
+]
+# One vertex per pixel of the offscreen buffer: row-major from the bottom-left.
+_READBACK_GLSL = [
+    "  int column = gl_VertexID % int(readback_size.x), row_index = gl_VertexID / int(readback_size.x);",
+    "  gl_Position = vec4((float(column) + 0.5) * 2.0 / readback_size.x - 1.0,",
+    "                     (float(row_index) + 0.5) * 2.0 / readback_size.y - 1.0, 0.0, 1.0);",
+    "  gl_PointSize = 1.0;",
+    "  result = vec4(rgb, visibility);",
+]
+_VIEWPORT_GLSL = [
+    "  gl_Position = ViewProjectionMatrix * vec4(p_position, 1.0);",
+    "  gl_Position.z -= depth_bias * gl_Position.w;",
+    "  shade = max(rgb, vec3(0.0));",
+]
+
+
 def vertex_source(order, lobes, model, readback):
     """The GLSL of the vertex shader's functions and main() for one configuration."""
     check_configuration(order, lobes, model)
-    diffuse_block0 = _diffuse_block0(order)
-    zh_scale = [math.sqrt(4.0 * math.pi / (2 * l + 1)) for l in range(order)]
-    ao_weight = [math.sqrt(4.0 * math.pi) * diffuse_block0[0, l] for l in range(order)]
     x = quarter_turn(order)
-    per_lobe = 3 + order
-    packed = [f"p_lobe{k}" for k in range(lobe_vec4_count(order, lobes))]
-
-    def packed_value(k):
-        return f"{packed[k // 4]}.{'xyzw'[k % 4]}"
-
     lines = [
         _eval_function(order), _normal_zonal_function(order), _rotate_z_function(order),
         _sparse_product_function("quarter_turn", x), _sparse_product_function("quarter_turn_t", x.T),
@@ -212,120 +299,48 @@ def vertex_source(order, lobes, model, readback):
         "void main()",
         "{",
         "  bool valid = true;",
-        # Frame: n, then t Gram–Schmidt'ed against it (a tangent within 1e-6 rad of n is unusable).
-        "  vec3 n = p_normal, t = p_tangent;",
-        "  float nn = dot(n, n);",
-        "  bool n_ok = finite3(n) && nn > 0.0 && !isinf(nn);",
-        "  n = n_ok ? n * inversesqrt(n_ok ? nn : 1.0) : vec3(0.0, 0.0, 1.0);",
-        "  float tt = dot(t, t);",
-        "  bool t_ok = finite3(t) && tt > 0.0 && !isinf(tt);",
-        "  t = t_ok ? t * inversesqrt(t_ok ? tt : 1.0) : vec3(1.0, 0.0, 0.0);",
-        "  t -= dot(t, n) * n;",
-        "  tt = dot(t, t);",
-        "  valid = n_ok && t_ok && tt > 1e-12;",
-        "  t = valid ? t * inversesqrt(valid ? tt : 1.0) : vec3(1.0, 0.0, 0.0);",
-        "  n = valid ? n : vec3(0.0, 0.0, 1.0);",
-        "  vec3 b = cross(n, t);",
-        "  vec3 zp = n;",
-    ]
-    if model == "phong":
-        lines += [
-            # z' = r = 2(n·w) n − w, w towards the camera; clamped to the horizon behind the surface.
-            "  vec3 w = shading.camera.xyz - p_position;",
-            "  bool position_ok = finite3(w);",
-            "  valid = valid && position_ok;",
-            "  float ww = dot(w, w);",
-            "  bool has_view = position_ok && ww > 0.0 && !isinf(ww);",
-            "  w = has_view ? w * inversesqrt(has_view ? ww : 1.0) : n;",
-            "  float cosine = dot(n, w);",
-            "  vec3 h = w - cosine * n;",
-            "  float hh = dot(h, h);",
-            "  bool horizon = hh > 1e-24;",
-            "  h = horizon ? h * inversesqrt(horizon ? hh : 1.0) : n;",
-            "  vec3 r = 2.0 * cosine * n - w;",
-            "  r = cosine < 0.0 ? (horizon ? -h : n) : r;",
-            "  float rr = dot(r, r);",
-            "  r = rr > 0.0 ? r * inversesqrt(rr > 0.0 ? rr : 1.0) : n;",
-            "  zp = has_view ? r : n;",
-        ]
-    lines += [
-        # F' = Rz(φ) Ry(θ), F' e_z = z'; at the poles φ is free (0).
-        "  float ct = zp.z, st = sqrt(zp.x * zp.x + zp.y * zp.y);",
-        "  bool pole = !(st > 0.0);",
-        "  float cp = pole ? 1.0 : zp.x / st, sp = pole ? 0.0 : zp.y / st;",
-        "  vec3 e1 = vec3(cp * ct, sp * ct, -st), e2 = vec3(-sp, cp, 0.0), e3 = vec3(cp * st, sp * st, ct);",
-        "  mat3 frame = mat3(t, b, n);",
-        "  float v[NC], y[NC], u[NC];",
-        "  for (int i = 0; i < NC; i++) { v[i] = 0.0; }",
-        "  float normal_zonal[ORDER], p[ORDER];",
-        "  for (int l = 0; l < ORDER; l++) { normal_zonal[l] = 0.0; }",
-        "  vec3 a;",
-        "  float g[ORDER];",
-        "  bool bands_finite, bands_zero, axis_ok, use;",
-        "  float aa;",
+        *_FRAME_GLSL,
+        *(_PHONG_AXIS_GLSL if model == "phong" else []),
+        *_ROTATION_GLSL,
     ]
     for lobe in range(lobes):
-        base = lobe * per_lobe
-        lines.append(f"  // lobe {lobe}: axis (local t, b, n) and band coefficients")
-        lines.append(f"  a = vec3({packed_value(base)}, {packed_value(base + 1)}, {packed_value(base + 2)});")
-        for l in range(order):
-            lines.append(f"  g[{l}] = {packed_value(base + 3 + l)};")
-        lines += [
-            "  bands_finite = true; bands_zero = true;",
-            "  for (int l = 0; l < ORDER; l++) {",
-            "    bands_finite = bands_finite && !isnan(g[l]) && !isinf(g[l]);",
-            "    bands_zero = bands_zero && g[l] == 0.0;",
-            "  }",
-            "  aa = dot(a, a);",
-            "  axis_ok = finite3(a) && aa > 0.0 && !isinf(aa);",
-            "  a = axis_ok ? a * inversesqrt(axis_ok ? aa : 1.0) : vec3(0.0, 0.0, 1.0);",
-            # A zero axis with zero bands is an unused lobe; anything else zero or non-finite is invalid.
-            "  valid = valid && bands_finite && (axis_ok || bands_zero);",
-            "  use = axis_ok && bands_finite && valid;",
-            "  for (int l = 0; l < ORDER; l++) { g[l] = use ? g[l] : 0.0; }",
-            "  sh_eval(vec3(dot(e1, frame * a), dot(e2, frame * a), dot(e3, frame * a)), y);",
-        ]
-        for l in range(order):
-            lines.append(f"  for (int i = {l * l}; i < {(l + 1) * (l + 1)}; i++) "
-                         f"{{ v[i] += {_f(zh_scale[l])} * g[{l}] * y[i]; }}")
-        if model == "phong":
-            lines.append("  zonal_eval(a.z, p);")
-            for l in range(order):
-                lines.append(f"  normal_zonal[{l}] += {_f(zh_scale[l])} * g[{l}] * p[{l}];")
-    lines += [
-        # Step 4: u = T v. Step 5: back to world, D(F') = Dz(φ) Xᵀ Dz(θ) X, then the dot with the lighting.
-        "  apply_operator(v, u);",
-        "  quarter_turn(u, y);",
-        "  rotate_z(ct, st, y);",
-        "  quarter_turn_t(y, u);",
-        "  rotate_z(cp, sp, u);",
-        "  vec3 rgb = vec3(0.0);",
-        "  for (int i = 0; i < NC; i++) { rgb += shading.lighting[i].rgb * u[i]; }",
-    ]
+        lines += _lobe_glsl(order, lobes, model, lobe)
+    lines += _TO_WORLD_GLSL
     if model == "translucent":
         lines += ["  sh_eval(n, y);",
                   "  for (int i = 0; i < NC; i++) { rgb += shading.back[i].rgb * y[i]; }"]
+    ao_weight = [math.sqrt(4.0 * math.pi) * w for w in _diffuse_block0(order)[0]]
     zonal = "normal_zonal[{l}]" if model == "phong" else "v[{i}]"
     terms = [f"{_f(ao_weight[l])} * " + zonal.format(l=l, i=sh_index(l, 0)) for l in range(order)]
     lines.append(f"  float visibility = {' + '.join(terms)};")
     lines += ["  rgb = valid ? rgb : vec3(0.0);", "  visibility = valid ? visibility : 0.0;"]
-    if readback:
-        lines += [
-            # One vertex per pixel of the offscreen buffer: row-major from the bottom-left.
-            "  int column = gl_VertexID % int(readback_size.x), row_index = gl_VertexID / int(readback_size.x);",
-            "  gl_Position = vec4((float(column) + 0.5) * 2.0 / readback_size.x - 1.0,",
-            "                     (float(row_index) + 0.5) * 2.0 / readback_size.y - 1.0, 0.0, 1.0);",
-            "  gl_PointSize = 1.0;",
-            "  result = vec4(rgb, visibility);",
-        ]
-    else:
-        lines += [
-            "  gl_Position = ViewProjectionMatrix * vec4(p_position, 1.0);",
-            "  gl_Position.z -= depth_bias * gl_Position.w;",
-            "  shade = max(rgb, vec3(0.0));",
-        ]
+    lines += _READBACK_GLSL if readback else _VIEWPORT_GLSL
     lines.append("}")
     return "\n".join(lines)
+
+
+def _lobe_glsl(order, lobes, model, lobe):
+    """main()'s lines for one ZH lobe: unpack, check, and add its SH (and, for
+    Phong, its zonal part about the normal)."""
+    zh_scale = [math.sqrt(4.0 * math.pi / (2 * l + 1)) for l in range(order)]
+    packed = [f"p_lobe{k}" for k in range(lobe_vec4_count(order, lobes))]
+
+    def packed_value(k):
+        return f"{packed[k // 4]}.{'xyzw'[k % 4]}"
+
+    base = lobe * (3 + order)
+    lines = [f"  // lobe {lobe}: axis (local t, b, n) and band coefficients",
+             f"  a = vec3({packed_value(base)}, {packed_value(base + 1)}, {packed_value(base + 2)});"]
+    lines += [f"  g[{l}] = {packed_value(base + 3 + l)};" for l in range(order)]
+    lines += _LOBE_CHECK_GLSL
+    for l in range(order):
+        lines.append(f"  for (int i = {l * l}; i < {(l + 1) * (l + 1)}; i++) "
+                     f"{{ v[i] += {_f(zh_scale[l])} * g[{l}] * y[i]; }}")
+    if model == "phong":
+        lines.append("  zonal_eval(a.z, p);")
+        for l in range(order):
+            lines.append(f"  normal_zonal[{l}] += {_f(zh_scale[l])} * g[{l}] * p[{l}];")
+    return lines
 
 
 FRAGMENT_READBACK = "void main()\n{\n  fragColor = result;\n}\n"
