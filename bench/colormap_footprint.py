@@ -1,4 +1,4 @@
-"""Footprint check for bench_colormap.py (run inside Blender): the
+"""Footprint check for colormap_benchmark.py (run inside Blender): the
 "Penumbra Pixel Footprint" node group against the true pixel footprint on a
 plane, computed here independently from the camera (the pixel's four
 corners projected onto the plane z = 0).

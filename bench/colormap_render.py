@@ -1,4 +1,4 @@
-"""Cycles comparison for bench_colormap.py (run inside Blender):
+"""Cycles comparison for colormap_benchmark.py (run inside Blender):
 a plane with a ColorRamp-mapped Noise Texture receding to the horizon.
 Ground truth: the plain ramp at GT_SPP samples. At 1, 4 and 16 spp: the plain
 ramp, the ramp applied to the filtered mean C(f̄) and Penumbra's node group.

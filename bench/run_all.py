@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""`make bench`: runs every bench/bench_*.py (each writes its tables and plots
+"""`make bench`: runs every bench/<tool>*_benchmark.py (each writes its tables and plots
 into docs/) in name order, or only those whose name contains an argument."""
 
 import glob
@@ -12,7 +12,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 def main():
     wanted = sys.argv[1:]
-    scripts = sorted(glob.glob(os.path.join(ROOT, "bench", "bench_*.py")))
+    scripts = sorted(glob.glob(os.path.join(ROOT, "bench", "*_benchmark.py")))
     scripts = [s for s in scripts if not wanted or any(w in os.path.basename(s) for w in wanted)]
     failed = []
     for script in scripts:

@@ -1,7 +1,7 @@
 """The light-rig tool's shadow scene, for copying: a smooth sphere resting on a
 plane, seen from above at an angle, so a rig's suns cast visible shadows.
 
-Used by examples/demo_light_rig.py and bench/bench_lights.py."""
+Used by examples/demo_light_rig.py and bench/lights_benchmark.py."""
 
 import math
 

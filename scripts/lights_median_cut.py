@@ -1,5 +1,5 @@
 """Debevec's median-cut light-probe sampling (2005) in numpy: the baseline the
-light rig is measured against, by bench/bench_lights.py and by
+light rig is measured against, by bench/lights_benchmark.py and by
 tests/python/test_lights.py in the same run. Not part of the add-on."""
 
 import math

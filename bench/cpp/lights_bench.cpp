@@ -5,11 +5,11 @@
 // N = 300, one thread and all cores. Video decoding is timed apart. The
 // paper: under 5 ms for 300 lights at 360x90 on a 3 GHz Pentium 4 (2005).
 // Usage: penumbra_lights_bench [world.exr] [out.md]
-// 16k memory check (driven by bench/bench_lights_timing.py, one process per
+// 16k memory check (driven by bench/lights_timing_benchmark.py, one process per
 // measurement so each peak RSS is its own):
 //   penumbra_lights_bench --make-16k world.exr out.exr   bilinear 16384x8192 half EXR, written by scanlines
 //   penumbra_lights_bench --read-16k file.exr stream|whole   64-light rig; prints "ms_read ms_total peak_rss_mb"
-// Angular-region culling (paper §4.1), also driven by bench/bench_lights_timing.py:
+// Angular-region culling (paper §4.1), also driven by bench/lights_timing_benchmark.py:
 //   penumbra_lights_bench --regions world.exr   prints a markdown section: brute force vs the region table
 #include <algorithm>
 #include <chrono>
@@ -206,7 +206,7 @@ int regions_bench(const std::string& world) {
     const auto sampler = make_sampler(SamplerKind::havran, dist);
     std::ostringstream md;
     md << "\n## Angular-region culling (paper §4.1)\n\n"
-       << "Written by `build/bench/penumbra_lights_bench --regions` (`bench/bench_lights_timing.py --only-regions` "
+       << "Written by `build/bench/penumbra_lights_bench --regions` (`bench/lights_timing_benchmark.py --only-regions` "
           "re-runs just this section). Rigs of N lights from `"
        << std::filesystem::path(world).filename().string()
        << "` (working map 1024 wide, Havran sampling, region powers: the add-on's defaults), " << normal_count
@@ -288,7 +288,7 @@ int main(int argc, char** argv) {
     if (argc == 4 && std::string(argv[1]) == "--read-16k") return read_16k(argv[2], argv[3]);
     if (argc == 3 && std::string(argv[1]) == "--regions") return regions_bench(argv[2]);
     const std::string world = argc > 1 ? argv[1] : "/usr/share/blender/datafiles/studiolights/world/forest.exr";
-    const std::string out_path = argc > 2 ? argv[2] : "docs/lights-timing.md";
+    const std::string out_path = argc > 2 ? argv[2] : "docs/lights-timing-benchmark.md";
     const Image source = read_image(world);
     std::ostringstream md;
     const int cores = resolve_threads(0);

@@ -4,7 +4,7 @@
 // output bytes), so "× stream" says how far above the bandwidth limit the
 // shader is. Also the straightforward per-vertex reference path (full SH
 // rotation of the RGB lighting per vertex), float vs double buffers, and the
-// order. Prints a Markdown table; bench/bench_pose_shading.py writes it to
+// order. Prints a Markdown table; bench/sh_shading_benchmark.py writes it to
 // docs/sh-shading-benchmark.md. Not a test: `make bench` runs it.
 //
 //   penumbra_pose_shading_bench [--quick]

@@ -1,5 +1,5 @@
 // Raw Embree occlusion throughput on a mesh given as three raw files, for
-// bench/bench_visibility.py (which writes them from Blender's meshes):
+// bench/visibility_benchmark.py (which writes them from Blender's meshes):
 //   penumbra_visibility_throughput_bench POSITIONS.f32 NORMALS.f32 TRIANGLES.u32 RAYS THREADS single|packet
 // Prints one JSON object: rays, seconds, rays_per_second, occluded_fraction, packet_width.
 #include <cstdio>

@@ -1,5 +1,5 @@
 """Run by tests/python/test_gpu_preview_in_blender.py (and
-bench/bench_gpu_preview.py, for the 100k-vertex timing) in a Blender that
+bench/visibility_gpu_preview_benchmark.py, for the 100k-vertex timing) in a Blender that
 has a GPU: Debian's Blender 3.4 in a real window under Xvfb (Mesa's
 llvmpipe, OpenGL 4.5), or the bpy 5.x module after gpu.init() (EGL):
 

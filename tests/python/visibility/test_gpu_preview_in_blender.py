@@ -5,7 +5,7 @@ Debian's Blender 3.4 in a real window under Xvfb (Mesa's llvmpipe, OpenGL
 4.5), and in the bpy 5.2 module after gpu.init() (EGL, the same llvmpipe).
 These need only the `blender`, `xvfb-run` and .venv313 programs that
 scripts/install_deps.sh installs. The frame time at 100k vertices is
-measured by bench/bench_gpu_preview.py, not here."""
+measured by bench/visibility_gpu_preview_benchmark.py, not here."""
 
 import json
 import os

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Colour-map filtering measurements -> docs/colormap_benchmark.md (+ EXR/PNG
+"""Colour-map filtering measurements -> docs/colormap-benchmark.md (+ EXR/PNG
 renders in docs/colormap/). Ratios are against baselines measured in the same
 run: lookup build time against a brute-force sampled convolution, bilinear
 error against table size, the paper's height fit against the exact table,
@@ -23,7 +23,7 @@ import _penumbra as pen  # noqa: E402
 
 DOCS = os.path.join(ROOT, "docs")
 lines = ["# Colour-map filtering: measurements", "",
-         "Written by `bench/bench_colormap.py` (`make bench BENCH=colormap`). Machine: shared 2-core CI box.", ""]
+         "Written by `bench/colormap_benchmark.py` (`make bench BENCH=colormap`). Machine: shared 2-core CI box.", ""]
 
 
 def timed(fn, repeat=3):
@@ -221,7 +221,7 @@ def main():
     for section in (bench_build, bench_accuracy, bench_height, bench_footprint, bench_render):
         print(f"colormap benchmark: {section.__name__}", flush=True)
         lines += section()
-    path = os.path.join(DOCS, "colormap_benchmark.md")
+    path = os.path.join(DOCS, "colormap-benchmark.md")
     with open(path + ".tmp", "w") as f:
         f.write("\n".join(lines) + "\n")
     os.replace(path + ".tmp", path)

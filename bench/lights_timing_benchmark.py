@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Runs the C++ per-frame timing benchmark of the light-rig pipeline
-(bench/cpp/lights_bench.cpp) and writes docs/lights-timing.md, then the
+(bench/cpp/lights_bench.cpp) and writes docs/lights-timing-benchmark.md, then the
 angular-region culling section (brute-force irradiance against the region
 table, `penumbra_lights_bench --regions`), then measures a 16384x8192 map: time and peak RSS of the streamed read against reading the
 whole file first (one process each), and of bpy.ops.penumbra.build_light_rig
@@ -19,7 +19,7 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WORLD = "/usr/share/blender/datafiles/studiolights/world/forest.exr"
-OUT = os.path.join(ROOT, "docs", "lights-timing.md")
+OUT = os.path.join(ROOT, "docs", "lights-timing-benchmark.md")
 
 # Runs inside the bpy module (a fresh process): operator on the 16k file.
 BPY_SCRIPT = r"""

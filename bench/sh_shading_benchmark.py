@@ -49,7 +49,7 @@ def main():
         return
     text = f"""# Pose shading benchmark
 
-Written by `bench/bench_pose_shading.py` (`make bench BENCH=pose_shading`), which runs
+Written by `bench/sh_shading_benchmark.py` (`make bench BENCH=pose_shading`), which runs
 `bench/cpp/pose_shading_bench.cpp`. What is measured and why: docs/sh-engine.md.
 
 - machine: {cpu_model()}, {os.cpu_count()} hardware threads; load average {load_before:.2f} when it started

@@ -220,7 +220,7 @@ def main():
         print(f"  flicker {name}: {flicker[name]}", flush=True)
 
     lines = ["# Light-rig benchmark results", "",
-             f"Written by `bench/bench_lights.py` ({time.strftime('%Y-%m-%d')}, {time.time() - started:.0f} s). "
+             f"Written by `bench/lights_benchmark.py` ({time.strftime('%Y-%m-%d')}, {time.time() - started:.0f} s). "
              "Irradiance relative RMSE over 1000 normals against the exact irradiance of the full 1024x512 map, "
              "geometric mean over Blender's 8 bundled HDRIs (city, courtyard, forest, interior, night, studio, "
              "sunrise, sunset). Ratio = error / median cut's error at the same N (< 1: better than median cut).", "",
