@@ -2,12 +2,9 @@
 (world space), the armature's rest-relative bone rotations, which bones can
 change this mesh's occlusion, and the World lighting. No bake logic here."""
 
-import os
-
 import numpy as np
 
-from .. import native
-from ..compat import uses_nodes
+from .. import color, native, world
 
 
 class VisibilityInputError(ValueError):
@@ -247,145 +244,28 @@ def armature_has_animation(armature):
 
 
 # World lighting ---------------------------------------------------------------
+# The World is read by penumbra.world (its wiring, rotation, pixels and colour
+# space); here its lighting becomes SH coefficients, cached per image.
 
 _lighting_cache = {}
 
 
-def _socket_source(socket):
-    if socket is None or not socket.is_linked:
-        return None
-    link = socket.links[0]
-    return link.from_node
-
-
-def _euler_matrix(euler):
-    from mathutils import Euler
-    return np.array(Euler(tuple(euler), "XYZ").to_matrix(), dtype=np.float64)
-
-
-def _image_pixels_top_down(image):
-    width, height = image.size
-    channels = image.channels
-    pixels = np.empty(width * height * channels, dtype=np.float32)
-    image.pixels.foreach_get(pixels)
-    pixels = pixels.reshape(height, width, channels)[::-1]  # Blender stores rows bottom-up
-    if channels < 3:
-        pixels = np.repeat(pixels[..., :1], 3, axis=2)
-    pixels = np.ascontiguousarray(pixels[..., :3])
-    if not image.is_float:
-        # Byte images hold the file's encoding; convert to scene linear with
-        # Blender's config: the file's working space from Blender 5.0 on (float
-        # buffers are already in it; see color.working_space).
-        from .. import color
-        config = color.blender_config()
-        name = image.colorspace_settings.name
-        if name and name not in {"Non-Color", "Raw"}:
-            pixels = color.to_working_space(config, pixels, name)
-    return pixels
-
-
-class WorldReading:
-    """What the World's node tree says about the lighting, without pixels:
-    `kind` 'black', 'uniform' or 'environment'; colour (RGB), strength,
-    the Environment Texture node and rotation; `note` says what was read, and
-    `supported` is False when part of the tree could not be read (then the
-    uniform Background colour, or black, stands in, and the panel says so)."""
-
-    def __init__(self):
-        self.kind = "black"
-        self.colour = np.zeros(3)
-        self.strength = 1.0
-        self.environment = None
-        self.rotation = np.eye(3)
-        self.note = ""
-        self.supported = True
-        self.problems = []
-
-
-def _float_input(socket, reading, what):
-    """A float input: its own value, or a Value node's; anything else is unsupported (its default is used)."""
-    source = _socket_source(socket)
-    if source is None:
-        return float(socket.default_value)
-    if source.bl_idname == "ShaderNodeValue":
-        return float(source.outputs[0].default_value)
-    reading.problems.append(f"{what} comes from a {source.bl_label} node (unsupported: its own value is used)")
-    return float(socket.default_value)
-
-
 def read_world(scene):
-    """Walks the World's nodes: Background (Color, Strength) at the active
-    World Output; Strength from its value or a Value node; Color from its
-    value, an RGB node, or an Environment Texture (with an optional Mapping
-    node's rotation). Sky Texture and other sources are reported unsupported."""
-    r = WorldReading()
-    world = scene.world
-    if world is None:
-        r.note = "no World: black"
-        return r
-    if not uses_nodes(world):  # always node-based from 5.0 (compat.py)
-        r.kind, r.colour, r.note = "uniform", np.array(world.color[:3], dtype=np.float64), "World colour"
-        return r
-    tree = world.node_tree
-    output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputWorld" and n.is_active_output), None)
-    if output is None:
-        output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputWorld"), None)
-    background = _socket_source(output.inputs["Surface"]) if output else None
-    if background is None or background.bl_idname != "ShaderNodeBackground":
-        r.note = "World output not fed by a Background node: black"
-        r.supported = background is None
-        if background is not None:
-            r.problems.append(f"the World output is fed by a {background.bl_label} node (unsupported)")
-        return _finish(r)
-    r.strength = _float_input(background.inputs["Strength"], r, "Strength")
-    colour_socket = background.inputs["Color"]
-    r.colour = np.array(colour_socket.default_value[:3], dtype=np.float64)
-    r.kind, r.note = "uniform", "uniform Background colour"
-    source = _socket_source(colour_socket)
-    if source is None:
-        return _finish(r)
-    if source.bl_idname == "ShaderNodeRGB":
-        r.colour = np.array(source.outputs[0].default_value[:3], dtype=np.float64)
-        r.note = f"uniform colour of '{source.name}'"
-        return _finish(r)
-    if source.bl_idname == "ShaderNodeTexSky":
-        r.problems.append("Sky Texture is not supported: the Background colour stands in")
-        return _finish(r)
-    if source.bl_idname != "ShaderNodeTexEnvironment":
-        r.problems.append(f"Color comes from a {source.bl_label} node (unsupported: the Background colour stands in)")
-        return _finish(r)
-    if source.image is None:
-        r.problems.append("the Environment Texture has no image: the Background colour stands in")
-        return _finish(r)
-    r.kind, r.environment, r.note = "environment", source, f"environment '{source.image.name}'"
-    mapping = _socket_source(source.inputs["Vector"])
-    if mapping is not None and mapping.bl_idname == "ShaderNodeMapping":
-        if "Rotation" in mapping.inputs:
-            if mapping.inputs["Rotation"].is_linked:
-                r.problems.append("the Mapping rotation is linked (unsupported: its own value is used)")
-            euler = mapping.inputs["Rotation"].default_value
-        else:
-            euler = mapping.rotation
-        r.rotation = _euler_matrix(euler)
-        if mapping.vector_type in {"TEXTURE"}:
-            r.rotation = r.rotation.T
-    elif mapping is not None and mapping.bl_idname != "ShaderNodeTexCoord":
-        r.problems.append(f"the environment's Vector comes from a {mapping.bl_label} node (unsupported: ignored)")
-    return _finish(r)
-
-
-def _finish(r):
-    if r.problems:
-        r.supported = False
-        r.note += "; " + "; ".join(r.problems)
+    """world.read_scene, plus what the SH projection cannot use: a map in
+    another projection than equirectangular (the Background colour stands in)."""
+    r = world.read_scene(scene)
+    if r.kind == "environment" and r.projection != "EQUIRECTANGULAR":
+        r.kind, r.node, r.image = "uniform", None, None
+        r.problems.append(f"the {r.projection.replace('_', ' ').title()} projection of the Environment Texture is "
+                          "not supported by the visibility shading (the Background colour stands in); use an "
+                          "equirectangular image")
     return r
 
 
 def world_lighting(scene, order):
     """(order², 3) SH of the World's radiance (scene-linear), and a note on what
-    was used (read_world). Honours Environment Texture (image, colour space),
-    a Mapping node's rotation, the Background strength (or a Value node), an
-    RGB node; unsupported set-ups fall back to the Background colour and say
+    was used (read_world: the World as penumbra.world reads it, its strength
+    applied); unsupported set-ups fall back to the Background colour and say
     so in the note."""
     lighting, note, pixel_warning = world_lighting_checked(scene, order)
     return lighting, (f"{note}; {pixel_warning}" if pixel_warning else note)
@@ -409,45 +289,30 @@ def world_lighting_checked(scene, order):
     """world_lighting, and a warning about the environment image's pixels
     (NaN, infinite or negative values; '' when none) kept apart from the note."""
     core = native.require()
-    n_sh = order * order
-    lighting = np.zeros((n_sh, 3))
-    sqrt_4pi = np.sqrt(4.0 * np.pi)
+    lighting = np.zeros((order * order, 3))
     r = read_world(scene)
     if r.kind == "black":
         return lighting, r.note, ""
     if r.kind == "uniform":
-        lighting[0] = r.colour * r.strength * sqrt_4pi
+        lighting[0] = r.colour * r.strength * np.sqrt(4.0 * np.pi)
         return lighting, r.note, ""
-    image = r.environment.image
-    from .. import color
+    image = r.image
     # The working space (Blender 5.0+) changes what the pixels mean, and a
     # float image's pixels themselves.
     key = (image.name, image.filepath, tuple(image.size), image.colorspace_settings.name,
            color.file_working_space(), order)
     cached = _lighting_cache.get(key)
     if cached is None:
-        pixels = _image_pixels_top_down(image)
-        if pixels.size == 0:
-            raise VisibilityInputError(
-                f"the World's environment image '{image.name}' has no pixels: {_unreadable(image)}")
+        try:
+            pixels = world.image_pixels(image)
+        except world.WorldError as error:
+            raise VisibilityInputError(str(error)) from None
         coefficients, stats = core.sh.project_environment(order, pixels, with_stats=True)
         cached = coefficients, _pixel_warning(image, stats)
         _lighting_cache.clear()
         _lighting_cache[key] = cached
     coefficients, pixel_warning = cached
-    rotation = r.rotation
-    # The texture is looked up at R·d: L(d) = E(R d), so its SH are D(Rᵀ)·c.
-    lit = core.sh.rotate(coefficients, rotation.T) if not np.allclose(rotation, np.eye(3)) else coefficients
+    # L(d) = E(world_from_mapᵀ·d): the SH of the map rotated by world_from_map.
+    rotated = not np.allclose(r.world_from_map, np.eye(3))
+    lit = core.sh.rotate(coefficients, r.world_from_map) if rotated else coefficients
     return np.asarray(lit) * r.strength, r.note, pixel_warning
-
-
-def _unreadable(image):
-    """Why an image has no pixels, and what to do."""
-    import bpy
-    if image.source in {"FILE", "SEQUENCE", "MOVIE"} and image.packed_file is None:
-        path = bpy.path.abspath(image.filepath, library=image.library)
-        if not os.path.isfile(path):
-            return f"its file '{path}' is missing; point the image at an existing file"
-        return (f"Blender could not read its file '{path}' (empty, zero-sized or damaged?); "
-                "replace it with a readable image")
-    return "the image is empty; fill it or choose another image"
