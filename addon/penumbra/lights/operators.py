@@ -12,11 +12,9 @@ import os
 import tempfile
 
 import bpy
-import mathutils
 import numpy as np
 
-from .. import color, native
-from ..compat import uses_nodes
+from .. import color, native, world
 from . import rig_objects, settings
 from ..core_settings import limits
 
@@ -24,31 +22,6 @@ PREVIEW_NAME = "Penumbra Light Rig Preview"
 _SETTING_NAMES = ("filepath", "mapping", "colorspace", "count", "sampler", "power", "blue_noise",
                   "temporal_filter", "cluster_max", "adaptive_tolerance", "frame_start", "frame_end",
                   "limit_shadows", "json_path")
-
-
-def world_environment(world):
-    """(image node, background strength, world_from_map 3x3 or None, vector_type) of the World."""
-    if not uses_nodes(world):
-        return None, 1.0, None, None
-    env = next((n for n in world.node_tree.nodes if n.type == "TEX_ENVIRONMENT" and n.image is not None), None)
-    if env is None:
-        return None, 1.0, None, None
-    strength = 1.0
-    for node in world.node_tree.nodes:
-        if node.type == "BACKGROUND":
-            strength = float(node.inputs["Strength"].default_value)
-            break
-    world_from_map = None
-    vector_type = None
-    vector = env.inputs["Vector"]
-    if vector.is_linked and vector.links[0].from_node.type == "MAPPING":
-        mapping = vector.links[0].from_node
-        vector_type = mapping.vector_type
-        rot = mathutils.Euler(tuple(mapping.inputs["Rotation"].default_value), "XYZ").to_matrix()
-        # The texture is looked up at m = R·d (POINT, VECTOR, NORMAL) or
-        # m = R⁻¹·d (TEXTURE); a light seen at map direction m sits at d.
-        world_from_map = rot if vector_type == "TEXTURE" else rot.transposed()
-    return env, strength, world_from_map, vector_type
 
 
 class _Job:
@@ -60,67 +33,70 @@ class _Job:
         self.scene = context.scene
         self.op = op
         self.strength = 1.0
-        self.array = None  # pixels of a packed/generated World image
-        world_from_map = None
-        path = bpy.path.abspath(op.filepath) if op.filepath else ""
-        colorspace = op.colorspace
+        self.array = None  # pixels of a packed/generated World image, in the working space
+        self.world_from_map = None
+        self.mapping = op.mapping
         self.config = color.blender_config()
         # Scene-linear in this file: light colours are read in it (per file
         # from Blender 5.0; see color.working_space).
         self.working = color.working_space(self.config)
-        if not path:
-            env, self.strength, world_from_map, _ = world_environment(self.scene.world)
-            if env is None:
-                raise ValueError("no source file given and the World has no Environment Texture with an image")
-            image = env.image
-            packed = not (image.packed_file is None and image.source in {"FILE", "SEQUENCE", "MOVIE"})
-            if not colorspace:
-                # A file is read in its own colour space. Blender keeps a float
-                # image's pixels in the working space (Blender 5.x converts a
-                # float file to it on load whatever the image's colour space
-                # says); byte pixels hold the image's encoding.
-                colorspace = self.working if packed and image.is_float else image.colorspace_settings.name
-            if not packed:
-                path = bpy.path.abspath(image.filepath, library=image.library)
-            else:
-                w, h = image.size
-                if w == 0 or h == 0:
-                    raise ValueError(f"the World's image '{image.name}' has no pixels")
-                px = np.empty(w * h * 4, dtype=np.float32)
-                image.pixels.foreach_get(px)
-                self.array = px.reshape(h, w, 4)[::-1, :, :3].copy()  # Blender rows are bottom-up
-        self.path = path
-        self.colorspace = colorspace or ""
-        if self.colorspace and not self.config.has_colorspace(self.colorspace):
-            names = ", ".join(self.config.colorspace_names())
-            raise ValueError(f"unknown colour space '{self.colorspace}'; Blender's config has: {names}")
+        self._check_colorspace(op.colorspace)
+        if op.filepath:
+            self.path, self.colorspace = bpy.path.abspath(op.filepath), op.colorspace
+        else:
+            self.path, self.colorspace = self._from_world(op.colorspace)
+        self._check_colorspace(self.colorspace)
         if self.array is not None:
             self.source = None
             self.frames = 1
             self.fps = 0.0
         else:
-            self.source = self.core.lights.open_source(path)
+            self.source = self.core.lights.open_source(self.path)
             self.fps = self.source.frames_per_second
             wanted = max(1, op.frame_end - op.frame_start + 1)
             self.frames = min(self.source.frame_count, wanted)
         if self.frames > 1 and self.fps <= 0.0:
             self.fps = self.scene.render.fps / self.scene.render.fps_base
-        matrix = None
-        if world_from_map is not None:
-            matrix = [list(row) for row in world_from_map]
         self.builder = self.core.lights.RigBuilder(
-            count=op.count, sampler=op.sampler, blue_noise=op.blue_noise, power=op.power, mapping=op.mapping,
+            count=op.count, sampler=op.sampler, blue_noise=op.blue_noise, power=op.power, mapping=self.mapping,
             temporal_filter=op.temporal_filter, frames_per_second=self.fps, cluster_max=op.cluster_max,
-            adaptive_tolerance=op.adaptive_tolerance, world_from_map=matrix)
+            adaptive_tolerance=op.adaptive_tolerance, world_from_map=self.world_from_map)
         self.done = 0
+
+    def _check_colorspace(self, name):
+        if name and not self.config.has_colorspace(name):
+            names = ", ".join(self.config.colorspace_names())
+            raise ValueError(f"unknown colour space '{name}'; Blender's config has: {names}")
+
+    def _from_world(self, colorspace):
+        """(path, colour space) of the World's map, read by penumbra.world with
+        its strength, rotation and projection. A file is read by the core in
+        its own colour space (or `colorspace`); a packed or generated image's
+        pixels go to self.array, in the working space (path '')."""
+        reading = world.read_scene(self.scene)
+        if reading.kind != "environment":
+            raise ValueError(f"no source file given, and the World is not lit by an image ({reading.note}): "
+                             "connect an Environment Texture with an image to the Background at the active "
+                             "World Output, or give a Source file")
+        if not reading.supported:
+            raise ValueError(f"no source file given, and the World's map cannot be used as it is wired "
+                             f"({reading.note}): fix that, or give a Source file")
+        self.strength = reading.strength
+        self.world_from_map = reading.world_from_map
+        self.mapping = reading.projection  # the World's own: how Blender shows the map
+        image = reading.image
+        path = world.image_file(image)
+        if path is not None:
+            return path, colorspace or image.colorspace_settings.name
+        self.array = world.image_pixels(image, self.config, colorspace)
+        # The rig is built in the config's scene_linear role, as from a file
+        # (its luminance splits the map), and its colours converted back.
+        return "", self.working
 
     def step(self):
         """Adds the next frame; returns True when every frame is in."""
         if self.array is not None:
-            pixels = self.array
-            if self.colorspace:
-                pixels = self.config.to_scene_linear(pixels, self.colorspace)
-            self.builder.add_frame(pixels)
+            self.builder.add_frame(self.config.to_scene_linear(self.array, self.colorspace))
         else:
             self.builder.add_frame_from(self.source, self.done, self.config if self.colorspace else None,
                                         self.colorspace)
