@@ -1,0 +1,465 @@
+"""penumbra.world, the one reader of the World, inside real Blender: which
+Environment Texture lights the scene (the wired one, also inside node groups,
+for the render engine in use), the rotation of Mapping and Vector Rotate
+nodes (checked against the same map rotated in numpy, by Blender's
+equirectangular convention), the colour space of the image, plain-colour and
+broken Worlds, and that the visibility shading and the light rig, which both
+read the World through it, see the same light."""
+
+import json
+import math
+import os
+import sys
+
+import bpy
+import mathutils
+import numpy as np
+import pytest
+
+from penumbra import compat, native, world
+from penumbra.colormap import interface
+from penumbra.visibility import scene_data
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from test_lights import _directions, _sky_and_sun, _solid_angles  # noqa: E402
+
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+SUN = np.array([0.4, -0.3, 0.8]) / np.linalg.norm([0.4, -0.3, 0.8])
+OTHER_SUN = np.array([-0.5, 0.6, 0.3]) / np.linalg.norm([-0.5, 0.6, 0.3])
+ORDER = 4
+
+
+@pytest.fixture
+def addon(factory_scene):
+    import penumbra
+    penumbra.register()
+    scene_data._lighting_cache.clear()
+    try:
+        yield factory_scene
+    finally:
+        penumbra.unregister()
+
+
+def _core():
+    return native.require()
+
+
+# Building Worlds ------------------------------------------------------------------
+
+def _new_world(scene, name="Test World"):
+    """A World with the default Background → World Output, set on the scene."""
+    w = bpy.data.worlds.new(name)
+    scene.world = w
+    return w, compat.ensure_nodes(w)
+
+
+def _image(path, pixels):
+    """An EXR of `pixels` (row 0 = top), loaded into Blender."""
+    _core().image.write_exr(path, pixels.astype(np.float32), half=False, colorspace="Linear")
+    return bpy.data.images.load(path)
+
+
+def _environment(tree, image, link=True):
+    env = tree.nodes.new("ShaderNodeTexEnvironment")
+    env.image = image
+    if link:
+        tree.links.new(env.outputs["Color"], tree.nodes["Background"].inputs["Color"])
+    return env
+
+
+def _drive_vector(tree, env, node):
+    """Texture Coordinate (Generated) → `node` → the texture's Vector."""
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    tree.links.new(coords.outputs["Generated"], node.inputs["Vector"])
+    tree.links.new(node.outputs["Vector"], env.inputs["Vector"])
+    return node
+
+
+def _mapping(tree, env, rotation, vector_type="POINT"):
+    mapping = tree.nodes.new("ShaderNodeMapping")
+    mapping.vector_type = vector_type
+    mapping.inputs["Rotation"].default_value = rotation
+    return _drive_vector(tree, env, mapping)
+
+
+def _map_world(scene, path, pixels, rotation=None, vector_type="POINT"):
+    w, tree = _new_world(scene, os.path.basename(path))
+    env = _environment(tree, _image(path, pixels))
+    if rotation is not None:
+        _mapping(tree, env, rotation, vector_type)
+    return w
+
+
+# What each tool sees ----------------------------------------------------------------
+
+def _sh(scene):
+    lighting, _ = scene_data.world_lighting(scene, ORDER)
+    return np.asarray(lighting)
+
+
+def _sh_moment(coefficients):
+    """∫ Y(ω) ω dω of the SH lighting's luminance Y (only band 1 contributes),
+    by quadrature over Fibonacci directions: the lighting's mean direction."""
+    dirs = _core().sh.fibonacci_directions(4000)
+    radiance = _core().sh.eval(ORDER, dirs) @ (coefficients @ LUMINANCE)
+    return (radiance[:, None] * dirs).sum(axis=0) * 4 * math.pi / len(dirs)
+
+
+def _rig(scene, tmp_path, count=16, name="rig.json"):
+    """(directions, rgb) of a light rig built from the World."""
+    json_path = str(tmp_path / name)
+    assert bpy.ops.penumbra.build_light_rig(count=count, json_path=json_path) == {"FINISHED"}
+    lights = json.load(open(json_path))["frames"][0]["lights"]
+    return np.array([l["direction"] for l in lights]), np.array([l["rgb"] for l in lights])
+
+
+def _rig_moment(directions, rgb):
+    return ((rgb @ LUMINANCE)[:, None] * directions).sum(axis=0)
+
+
+def _angle(a, b):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return math.degrees(math.acos(np.clip(a @ b / np.linalg.norm(a) / np.linalg.norm(b), -1, 1)))
+
+
+def _refused(scene, tmp_path, *words):
+    with pytest.raises(RuntimeError) as error:
+        bpy.ops.penumbra.build_light_rig(count=8, json_path=str(tmp_path / "refused.json"))
+    for word in words:
+        assert word in str(error.value), (word, str(error.value))
+    assert not os.path.exists(tmp_path / "refused.json")
+    return str(error.value)
+
+
+def _rotated_map(pixels, lookup):
+    """P(d) = E(lookup·d), nearest pixel, by the latlong convention of
+    core/common/latlong.hpp written out here in numpy."""
+    h, w = pixels.shape[:2]
+    m = _directions(h, w) @ np.asarray(lookup).T
+    col = np.floor(w * (0.5 - np.arctan2(m[..., 1], m[..., 0]) / (2 * math.pi))).astype(int) % w
+    row = np.clip(np.floor(h * np.arccos(np.clip(m[..., 2], -1, 1)) / math.pi).astype(int), 0, h - 1)
+    return pixels[row, col]
+
+
+# Which texture ------------------------------------------------------------------------
+
+def test_the_connected_environment_wins_over_an_unconnected_one(addon, tmp_path):
+    scene = addon
+    w, tree = _new_world(scene)
+    # The unconnected one comes first in the tree: a reader that takes the first
+    # Environment Texture it finds gets it.
+    stray = _environment(tree, _image(str(tmp_path / "stray.exr"), _sky_and_sun(sun=SUN)), link=False)
+    wired = _environment(tree, _image(str(tmp_path / "wired.exr"), _sky_and_sun(sun=OTHER_SUN)))
+    assert tree.nodes[:].index(stray) < tree.nodes[:].index(wired)
+    reading = world.read_scene(scene)
+    assert reading.kind == "environment" and reading.supported and reading.image.name == "wired.exr"
+    assert _angle(_sh_moment(_sh(scene)), OTHER_SUN) < 3.0
+    directions, rgb = _rig(scene, tmp_path)
+    assert _angle(_rig_moment(directions, rgb), OTHER_SUN) < 3.0
+    # Unwire it: the Background's colour lights the scene, as in Blender, and
+    # both textures are named as the likely mistake.
+    tree.links.remove(wired.outputs["Color"].links[0])
+    reading = world.read_scene(scene)
+    assert reading.kind == "uniform" and not reading.supported
+    assert f"'{stray.name}' (image 'stray.exr') is not connected" in reading.note
+    assert f"'{wired.name}' (image 'wired.exr') is not connected" in reading.note
+    _refused(scene, tmp_path, "not lit by an image", "is not connected", "Source file")
+
+
+def test_an_environment_inside_nested_node_groups_behind_a_reroute_is_read(addon, tmp_path):
+    scene = addon
+    pixels = _sky_and_sun(sun=SUN)
+    rotation = (0.0, 0.0, math.radians(90))
+    _map_world(scene, str(tmp_path / "flat.exr"), pixels, rotation)
+    flat_sh = _sh(scene)
+    flat_rig = _rig(scene, tmp_path, name="flat.json")
+    # The same wiring with the texture two groups deep: the Mapping outside
+    # reaches its Vector through both Group Inputs, its Color leaves through
+    # both Group Outputs and a reroute.
+    inner = bpy.data.node_groups.new("Inner Sky", "ShaderNodeTree")
+    interface.add_socket(inner, "Vector", "INPUT", "NodeSocketVector")
+    interface.add_socket(inner, "Color", "OUTPUT", "NodeSocketColor")
+    env = inner.nodes.new("ShaderNodeTexEnvironment")
+    env.image = _image(str(tmp_path / "grouped.exr"), pixels)
+    group_in, group_out = inner.nodes.new("NodeGroupInput"), inner.nodes.new("NodeGroupOutput")
+    inner.links.new(group_in.outputs["Vector"], env.inputs["Vector"])
+    inner.links.new(env.outputs["Color"], group_out.inputs["Color"])
+    outer = bpy.data.node_groups.new("Outer Sky", "ShaderNodeTree")
+    interface.add_socket(outer, "Vector", "INPUT", "NodeSocketVector")
+    interface.add_socket(outer, "Color", "OUTPUT", "NodeSocketColor")
+    nested = outer.nodes.new("ShaderNodeGroup")
+    nested.node_tree = inner
+    group_in, group_out = outer.nodes.new("NodeGroupInput"), outer.nodes.new("NodeGroupOutput")
+    outer.links.new(group_in.outputs["Vector"], nested.inputs["Vector"])
+    outer.links.new(nested.outputs["Color"], group_out.inputs["Color"])
+    w, tree = _new_world(scene, "Grouped")
+    group = tree.nodes.new("ShaderNodeGroup")
+    group.node_tree = outer
+    reroute = tree.nodes.new("NodeReroute")
+    tree.links.new(group.outputs["Color"], reroute.inputs[0])
+    tree.links.new(reroute.outputs[0], tree.nodes["Background"].inputs["Color"])
+    _mapping(tree, group, rotation)
+    reading = world.read_scene(scene)
+    assert reading.kind == "environment" and reading.supported and reading.image.name == "grouped.exr"
+    np.testing.assert_allclose(_sh(scene), flat_sh, rtol=0, atol=1e-9 * np.abs(flat_sh).max())
+    directions, rgb = _rig(scene, tmp_path, name="grouped.json")
+    np.testing.assert_allclose(directions, flat_rig[0], atol=1e-6)
+    np.testing.assert_allclose(rgb, flat_rig[1], rtol=1e-6)
+    # A muted Mapping node passes the vector on unrotated, as in Blender.
+    tree.nodes["Mapping"].mute = True
+    assert np.allclose(world.read_scene(scene).world_from_map, np.eye(3))
+
+
+def test_the_active_world_output_for_the_render_engine_is_read(addon, tmp_path):
+    scene = addon
+    w, tree = _new_world(scene)
+    tree.nodes["World Output"].target = "CYCLES"
+    _environment(tree, _image(str(tmp_path / "cycles.exr"), _sky_and_sun(sun=SUN)))
+    eevee_output = tree.nodes.new("ShaderNodeOutputWorld")
+    eevee_output.target = "EEVEE"
+    background = tree.nodes.new("ShaderNodeBackground")
+    tree.links.new(background.outputs[0], eevee_output.inputs["Surface"])
+    env = tree.nodes.new("ShaderNodeTexEnvironment")
+    env.image = _image(str(tmp_path / "eevee.exr"), _sky_and_sun(sun=OTHER_SUN))
+    tree.links.new(env.outputs["Color"], background.inputs["Color"])
+    scene.render.engine = "CYCLES"
+    assert world.read_scene(scene).image.name == "cycles.exr"
+    eevee = "BLENDER_EEVEE_NEXT" if (4, 2, 0) <= bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"
+    scene.render.engine = eevee
+    assert world.read_scene(scene).image.name == "eevee.exr"
+    assert _angle(_sh_moment(_sh(scene)), OTHER_SUN) < 3.0
+    # Two outputs for every engine: the active one.
+    tree.nodes["World Output"].target = "ALL"
+    eevee_output.target = "ALL"
+    eevee_output.is_active_output = True
+    assert world.read_scene(scene).image.name == "eevee.exr"
+    tree.nodes["World Output"].is_active_output = True
+    assert world.read_scene(scene).image.name == "cycles.exr"
+
+
+# Rotation -------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("vector_type, roll", [("POINT", 1), ("TEXTURE", -1)])
+def test_a_mapping_z_rotation_equals_the_map_pre_rotated(addon, tmp_path, vector_type, roll):
+    """Mapping (POINT) looks the texture up at Rz(90°)·d, so it shows what the
+    map pre-rotated by a quarter turn shows, its columns moved W/4 to the right
+    (TEXTURE: the inverse). The pre-rotated map is made in numpy by the latlong
+    convention (u = 0.5 − φ/2π), with no Mapping node."""
+    scene = addon
+    pixels = _sky_and_sun(sun=SUN, sky=0.05)
+    pre_rotated = np.roll(pixels, roll * pixels.shape[1] // 4, axis=1)
+    _map_world(scene, str(tmp_path / "plain.exr"), pixels)
+    plain_sh = _sh(scene)
+    _map_world(scene, str(tmp_path / "pre.exr"), pre_rotated)
+    expected_sh = _sh(scene)
+    expected_rig = _rig(scene, tmp_path, name="pre.json")
+    _map_world(scene, str(tmp_path / "mapped.exr"), pixels, (0.0, 0.0, math.radians(90)), vector_type)
+    got_sh = _sh(scene)
+    scale = np.abs(expected_sh).max()
+    assert np.abs(plain_sh - expected_sh).max() > 0.1 * scale  # the rotation matters
+    np.testing.assert_allclose(got_sh, expected_sh, rtol=0, atol=1e-6 * scale)
+    directions, rgb = _rig(scene, tmp_path, name="mapped.json")
+    # The sampler splits a rotated map into other regions: about 1° apart.
+    assert _angle(_rig_moment(directions, rgb), _rig_moment(*expected_rig)) < 2.0
+    # A sun at map direction s is seen at Rz(∓90°)·s.
+    seen = np.array([SUN[1], -SUN[0], SUN[2]]) if roll == 1 else np.array([-SUN[1], SUN[0], SUN[2]])
+    assert _angle(_rig_moment(directions, rgb), seen) < 3.0
+
+
+@pytest.mark.parametrize("invert", [False, True])
+def test_a_vector_rotate_about_z_equals_the_map_pre_rotated(addon, tmp_path, invert):
+    scene = addon
+    pixels = _sky_and_sun(sun=SUN, sky=0.05)
+    _map_world(scene, str(tmp_path / "pre.exr"), np.roll(pixels, (-1 if invert else 1) * 32, axis=1))
+    expected = _sh(scene)
+    w, tree = _new_world(scene)
+    env = _environment(tree, _image(str(tmp_path / "rotated.exr"), pixels))
+    rotate = tree.nodes.new("ShaderNodeVectorRotate")
+    rotate.rotation_type = "Z_AXIS"
+    rotate.inputs["Angle"].default_value = math.radians(90)
+    rotate.invert = invert
+    _drive_vector(tree, env, rotate)
+    assert world.read_scene(scene).supported
+    np.testing.assert_allclose(_sh(scene), expected, rtol=0, atol=1e-6 * np.abs(expected).max())
+
+
+@pytest.mark.parametrize("vector_type", ["POINT", "TEXTURE"])
+def test_a_full_euler_rotation_equals_the_map_resampled(addon, tmp_path, vector_type):
+    """Rotation about all three axes: Blender's Euler XYZ (mathutils, the
+    matrix Cycles builds) applied to a smooth map by resampling it in numpy."""
+    scene = addon
+    h, w = 128, 256
+    d = _directions(h, w)
+    pixels = (0.1 + 3.0 * np.clip(d @ SUN, 0, None)[..., None] ** 4 * np.array([1.0, 0.8, 0.5])
+              + 0.3 * np.clip(d @ OTHER_SUN, 0, None)[..., None] ** 2 * np.array([0.2, 0.4, 1.0]))
+    euler = (math.radians(30), math.radians(-20), math.radians(75))
+    lookup = np.array(mathutils.Euler(euler, "XYZ").to_matrix())
+    if vector_type == "TEXTURE":
+        lookup = lookup.T
+    _map_world(scene, str(tmp_path / "resampled.exr"), _rotated_map(pixels, lookup))
+    expected = _sh(scene)
+    _map_world(scene, str(tmp_path / "mapped.exr"), pixels, euler, vector_type)
+    reading = world.read_scene(scene)
+    np.testing.assert_allclose(reading.world_from_map, lookup.T, atol=1e-6)
+    got = _sh(scene)
+    assert np.abs(got - expected).max() < 0.01 * np.abs(expected).max(), np.abs(got - expected).max()
+
+
+def test_what_a_rotation_cannot_express_is_reported(addon, tmp_path):
+    scene = addon
+    w = _map_world(scene, str(tmp_path / "map.exr"), _sky_and_sun(), (0.0, 0.0, 0.5))
+    mapping = w.node_tree.nodes["Mapping"]
+    mapping.inputs["Location"].default_value = (1.0, 0.0, 0.0)
+    mapping.inputs["Scale"].default_value = (-1.0, 1.0, 1.0)
+    reading = world.read_scene(scene)
+    assert reading.kind == "environment" and not reading.supported
+    assert "has a Location" in reading.note and "set it to 0" in reading.note
+    assert "mirrors the map" in reading.note and "set it to 1" in reading.note
+    _refused(scene, tmp_path, "cannot be used as it is wired", "has a Location", "Source file")
+    # A uniform scale changes nothing (the lookup drops the length).
+    mapping.inputs["Location"].default_value = (0.0, 0.0, 0.0)
+    mapping.inputs["Scale"].default_value = (2.0, 2.0, 2.0)
+    assert world.read_scene(scene).supported
+    # A Mapping whose own Vector is unconnected looks up one direction.
+    w.node_tree.links.remove(mapping.inputs["Vector"].links[0])
+    assert "is not connected, so the map is looked up in one direction" in world.read_scene(scene).note
+
+
+def test_a_mirror_ball_world_is_decomposed_as_a_mirror_ball(addon, tmp_path):
+    """Cycles' direction_to_mirrorball and the core's mirror_ball mapping are
+    the same for a square image (a ball seen along +Y): the World's projection
+    picks the rig's mapping. The SH projection takes latlong maps only."""
+    scene = addon
+    pixels = np.full((64, 64, 3), 0.05, np.float32)
+    pixels[18:24, 40:46] = 50.0
+    path = str(tmp_path / "ball.exr")
+    w = _map_world(scene, path, pixels)
+    w.node_tree.nodes["Environment Texture"].projection = "MIRROR_BALL"
+    from_world = _rig(scene, tmp_path, count=8, name="world.json")
+    json_path = str(tmp_path / "file.json")
+    assert bpy.ops.penumbra.build_light_rig(filepath=path, mapping="MIRROR_BALL", count=8,
+                                            json_path=json_path) == {"FINISHED"}
+    lights = json.load(open(json_path))["frames"][0]["lights"]
+    np.testing.assert_allclose(from_world[0], [l["direction"] for l in lights], atol=1e-6)
+    reading = scene_data.read_world(scene)
+    assert reading.kind == "uniform" and "Mirror Ball projection" in reading.note
+
+
+# Colour ----------------------------------------------------------------------------------
+
+def _srgb_to_linear(encoded):
+    """The sRGB transfer function (IEC 61966-2-1), independent of OCIO."""
+    return np.where(encoded <= 0.04045, encoded / 12.92, ((encoded + 0.055) / 1.055) ** 2.4)
+
+
+def test_a_non_linear_image_is_converted_to_scene_linear_by_both_tools(addon, tmp_path):
+    scene = addon
+    h, w = 8, 16
+    encoded = np.empty((h, w, 3))
+    encoded[: h // 2] = np.array([200, 120, 40]) / 255.0
+    encoded[h // 2:] = np.array([30, 90, 160]) / 255.0
+    maker = bpy.data.images.new("maker", w, h)
+    rgba = np.ones((h, w, 4), np.float32)
+    rgba[..., :3] = encoded[::-1]  # Blender rows are bottom-up
+    maker.pixels.foreach_set(rgba.ravel())
+    maker.filepath_raw = str(tmp_path / "srgb.png")
+    maker.file_format = "PNG"
+    maker.save()
+    image = bpy.data.images.load(str(tmp_path / "srgb.png"))
+    assert not image.is_float and image.colorspace_settings.name == "sRGB"
+    w_, tree = _new_world(scene)
+    _environment(tree, image)
+    linear = _srgb_to_linear(encoded)
+    total = (linear * _solid_angles(h, w)[:, None, None]).sum(axis=(0, 1))  # ∫ L dω per channel
+    # Visibility: the SH lighting's constant term is ∫ L dω / √(4π).
+    np.testing.assert_allclose(_sh(scene)[0] * math.sqrt(4 * math.pi), total, rtol=2e-3)
+    np.testing.assert_allclose(world.image_pixels(image), linear, rtol=2e-3, atol=1e-4)
+    # Light rig, from the file and from the packed image: Σ rgb = ∫ L dω.
+    np.testing.assert_allclose(_rig(scene, tmp_path, count=4, name="file.json")[1].sum(axis=0), total, rtol=2e-3)
+    image.pack()
+    np.testing.assert_allclose(_rig(scene, tmp_path, count=4, name="packed.json")[1].sum(axis=0), total,
+                               rtol=2e-3)
+    # Non-Color data is not converted.
+    image.colorspace_settings.name = "Non-Color"
+    raw = (encoded * _solid_angles(h, w)[:, None, None]).sum(axis=(0, 1))
+    np.testing.assert_allclose(_sh(scene)[0] * math.sqrt(4 * math.pi), raw, rtol=2e-3)
+
+
+# Worlds without a map ------------------------------------------------------------------
+
+def test_a_colour_only_world_is_uniform_light(addon, tmp_path):
+    scene = addon
+    w, tree = _new_world(scene)
+    background = tree.nodes["Background"]
+    background.inputs["Color"].default_value = (0.2, 0.4, 0.8, 1.0)
+    background.inputs["Strength"].default_value = 2.5
+    reading = world.read_scene(scene)
+    assert reading.kind == "uniform" and reading.supported
+    # Strength is returned beside the colour, not folded into it.
+    assert reading.strength == 2.5 and np.allclose(reading.colour, (0.2, 0.4, 0.8))
+    lighting = _sh(scene)
+    np.testing.assert_allclose(lighting[0], 2.5 * np.array([0.2, 0.4, 0.8]) * math.sqrt(4 * math.pi), rtol=1e-6)
+    assert not lighting[1:].any()
+    _refused(scene, tmp_path, "not lit by an image", "connect an Environment Texture", "Source file")
+    if not compat.ALWAYS_USES_NODES:
+        # Nodes off (before Blender 5.0): the World's own colour.
+        w.use_nodes = False
+        w.color = (0.1, 0.3, 0.5)
+        reading = world.read_scene(scene)
+        assert reading.kind == "uniform" and np.allclose(reading.colour, (0.1, 0.3, 0.5))
+
+
+def test_a_world_with_no_nodes_no_output_or_no_image_says_what_to_do(addon, tmp_path):
+    scene = addon
+    scene.world = None
+    reading = world.read_scene(scene)
+    assert reading.kind == "black" and "no World" in reading.note
+    _refused(scene, tmp_path, "World", "Source file")
+    w, tree = _new_world(scene)
+    for node in list(tree.nodes):
+        tree.nodes.remove(node)
+    reading = world.read_scene(scene)
+    assert reading.kind == "black" and not reading.supported and not _sh(scene).any()
+    assert f"the World '{w.name}' has no World Output node" in reading.note
+    _refused(scene, tmp_path, "no World Output node", "connect a Background node")
+    tree.nodes.new("ShaderNodeOutputWorld")
+    reading = world.read_scene(scene)
+    assert reading.kind == "black" and "nothing (or only a muted node) is connected" in reading.note
+    w, tree = _new_world(scene, "No Image")
+    env = _environment(tree, None)
+    reading = world.read_scene(scene)
+    assert reading.kind == "uniform" and f"the Environment Texture '{env.name}' has no image" in reading.note
+    _refused(scene, tmp_path, "has no image: open an image in it")
+    # An image whose file is gone: the visibility shading says which file.
+    env.image = _image(str(tmp_path / "gone.exr"), _sky_and_sun())
+    os.remove(tmp_path / "gone.exr")
+    env.image.reload()
+    with pytest.raises(world.WorldError, match="gone.exr' is missing; point the image at an existing file"):
+        world.image_pixels(env.image)
+
+
+# Both tools ------------------------------------------------------------------------------
+
+def test_the_visibility_lighting_and_the_light_rig_see_the_same_light(addon, tmp_path):
+    """Through world.py both tools read the same map, rotation and strength:
+    the SH lighting's mean direction is the rig's, and its total light the rig's."""
+    scene = addon
+    pixels = _sky_and_sun(sun=SUN, sky=0.2)
+    w = _map_world(scene, str(tmp_path / "map.exr"), pixels,
+                   (math.radians(20), math.radians(-35), math.radians(110)))
+    tree = w.node_tree
+    value = tree.nodes.new("ShaderNodeValue")
+    value.outputs[0].default_value = 2.0
+    tree.links.new(value.outputs[0], tree.nodes["Background"].inputs["Strength"])
+    reading = world.read_scene(scene)
+    assert reading.supported and reading.strength == 2.0
+    lighting = _sh(scene)
+    directions, rgb = _rig(scene, tmp_path, count=32)
+    assert _angle(_sh_moment(lighting), _rig_moment(directions, rgb)) < 2.0
+    np.testing.assert_allclose(lighting[0] * math.sqrt(4 * math.pi), rgb.sum(axis=0), rtol=1e-3)
+    total = 2.0 * (pixels * _solid_angles(*pixels.shape[:2])[:, None, None]).sum(axis=(0, 1))
+    np.testing.assert_allclose(rgb.sum(axis=0), total, rtol=1e-4)
+    # Where the sun is seen: the map's sun turned by world_from_map.
+    seen = np.array(mathutils.Euler((math.radians(20), math.radians(-35), math.radians(110)),
+                                    "XYZ").to_matrix()).T @ SUN
+    assert _angle(_rig_moment(directions, rgb), seen) < 3.0
