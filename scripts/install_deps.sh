@@ -16,7 +16,8 @@ DEBIAN_PACKAGES=(
   libgtest-dev            # C++ unit tests
   cmake g++ make pkg-config binutils  # the build; readelf checks the packages' dependencies
   ffmpeg                  # makes the test videos (decoding uses the ffmpeg the package ships)
-  xvfb xauth              # a display for Blender's GPU and EEVEE work in tests and the demo
+  xvfb xauth              # a display for Blender's GPU and EEVEE work in tests and the demo, and the
+                          # real window examples/panel_screenshot.py photographs the sidebar in
   python3-venv            # the virtual environments below
   python3-pytest python3-numpy  # pytest and numpy inside Debian's Blender (it runs the system Python)
   assimp-testmodels       # CMU motion capture (BVH) that drives scripts/visibility_humanoid.py, the realistic test character

@@ -1,0 +1,78 @@
+"""The "Filtered Colour Maps" section of the sidebar: the two buttons that
+filter the active ColorRamp and put it back, then the lookup image's size,
+the range it covers and where it is written, in sub-panels."""
+
+import bpy
+
+from .. import sidebar
+from . import operators
+
+
+def _split(layout):
+    """Labels left, values right, as Blender's own panels; nothing here is animatable."""
+    layout.use_property_split = True
+    layout.use_property_decorate = False
+    return layout
+
+
+def _settings(context):
+    return context.scene.penumbra.colormap
+
+
+class PENUMBRA_PT_colormap(sidebar.ToolSection, bpy.types.Panel):
+    bl_label = "Filtered Colour Maps"
+
+    def draw(self, context):
+        column = self.layout.column()
+        column.operator(operators.PENUMBRA_OT_bake_colormap_lut.bl_idname, text="Bake Filtered Ramp",
+                        icon="NODE_TEXTURE")
+        column.operator(operators.PENUMBRA_OT_restore_color_ramp.bl_idname, text="Restore ColorRamp",
+                        icon="LOOP_BACK")
+
+
+class _SubPanel(sidebar.SidebarPanel):
+    bl_parent_id = "PENUMBRA_PT_colormap"
+
+
+class PENUMBRA_PT_colormap_lookup(_SubPanel, bpy.types.Panel):
+    bl_label = "Lookup Image"
+
+    def draw(self, context):
+        layout = _split(self.layout)
+        s = _settings(context)
+        column = layout.column(align=True)
+        column.prop(s, "lut_width", text="Width")
+        column.prop(s, "lut_height", text="Height")
+        layout.prop(s, "sigma_spacing", text="Spacing")
+
+
+class PENUMBRA_PT_colormap_range(_SubPanel, bpy.types.Panel):
+    bl_label = "Range"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = _split(self.layout)
+        s = _settings(context)
+        layout.prop(s, "sigma_max")
+        column = layout.column(align=True)
+        column.prop(s, "mean_min")
+        column.prop(s, "mean_max")
+        # "As Cycles Renders" is too long for the value column: label above, menu below.
+        column = layout.column(align=True)
+        column.label(text="Ramp Sampling")
+        column.prop(s, "sampling", text="")
+
+
+class PENUMBRA_PT_colormap_output(_SubPanel, bpy.types.Panel):
+    bl_label = "Output"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        layout = _split(self.layout)
+        s = _settings(context)
+        layout.prop(s, "output_folder")
+        layout.column(heading="Also Write").prop(s, "write_png", text="16-bit PNG")
+
+
+classes = (PENUMBRA_PT_colormap, PENUMBRA_PT_colormap_lookup, PENUMBRA_PT_colormap_range,
+           PENUMBRA_PT_colormap_output)
