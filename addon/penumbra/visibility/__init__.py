@@ -1,20 +1,20 @@
 """Shadowed relighting of rigged meshes: bake a pose-space ZH visibility model
 (core/visibility), then shade every pose from it (paper §3–4).
 
-Operators (names are a contract): penumbra.bake_visibility,
+Operators (names are a contract, in operators.py): penumbra.bake_visibility,
 penumbra.apply_visibility, penumbra.setup_material. Per-object settings:
 `object.penumbra_visibility`; scene settings: `scene.penumbra.visibility`.
 Its sidebar section is panel.py (registered by ../panels.py)."""
 
 import bpy
 
-from . import settings, bake, runtime, material, report, gpu_preview, panel  # noqa: F401
+from . import settings, bake, runtime, material, report, gpu_preview, operators, panel  # noqa: F401
 
 # Registered before the scene's `penumbra` group, which points at SceneSettings.
 settings_classes = settings.classes
 SceneSettings = settings.VisibilitySceneSettings
 
-_operator_classes = (*bake.classes, *runtime.classes, *material.classes)
+_operator_classes = operators.classes
 
 
 def register():

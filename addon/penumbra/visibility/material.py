@@ -43,27 +43,3 @@ def setup_material(obj):
     tree.links.new(attribute.outputs["Color"], emission.inputs["Color"])
     tree.links.new(emission.outputs["Emission"], output.inputs["Surface"])
     return material
-
-
-class PENUMBRA_OT_setup_material(bpy.types.Operator):
-    """Wire the penumbra_shading attribute into the active object's material (shown as emission)"""
-
-    bl_idname = "penumbra.setup_material"
-    bl_label = "Set Up Material"
-    bl_options = {"REGISTER", "UNDO"}
-
-    @classmethod
-    def poll(cls, context):
-        return context.active_object is not None and context.active_object.type == "MESH"
-
-    def execute(self, context):
-        try:
-            material = setup_material(context.active_object)
-        except ValueError as error:
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        self.report({"INFO"}, f"Material '{material.name}' now shows {SHADING_ATTRIBUTE}")
-        return {"FINISHED"}
-
-
-classes = (PENUMBRA_OT_setup_material,)

@@ -251,33 +251,6 @@ def request_refresh():
         shade_enabled_objects(scene)
 
 
-class PENUMBRA_OT_apply_visibility(bpy.types.Operator):
-    """Shade the active object (or every enabled object) at the current frame and write its attributes"""
-
-    bl_idname = "penumbra.apply_visibility"
-    bl_label = "Apply Visibility"
-    bl_options = {"REGISTER", "UNDO"}
-
-    @classmethod
-    def poll(cls, context):
-        return context.active_object is not None and context.active_object.type == "MESH"
-
-    def execute(self, context):
-        obj = context.active_object
-        try:
-            rgb, ao, info = shade_object(obj, context.scene, check_topology=True)
-        except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
-            obj.penumbra_visibility.status = str(error)  # the panel shows it
-            self.report({"ERROR"}, str(error))
-            return {"CANCELLED"}
-        obj.penumbra_visibility.status = ""
-        self.report({"INFO"}, f"Shaded {len(ao)} vertices of '{obj.name}' (mean visibility {float(ao.mean()):.3f})")
-        if info["world_warning"]:
-            self.report({"WARNING"}, info["world_warning"])
-        return {"FINISHED"}
-
-
-classes = (PENUMBRA_OT_apply_visibility,)
 
 
 def register_handlers():
