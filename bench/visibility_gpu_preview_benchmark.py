@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """GPU viewport preview frame times (run by `make bench`): the procedural
 character at 10k and 100k vertices in Debian's Blender 3.4 in a window under
-Xvfb (Mesa's llvmpipe), through tests/blender/gpu_preview_check.py, which
+Xvfb (Mesa's llvmpipe), through tests/blender/visibility/gpu_preview_check.py, which
 also checks GPU against CPU shading. Writes docs/visibility-gpu-preview-benchmark.md.
 
     .venv/bin/python bench/visibility_gpu_preview_benchmark.py
@@ -14,7 +14,7 @@ import subprocess
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-CHECK = os.path.join(ROOT, "tests", "blender", "gpu_preview_check.py")
+CHECK = os.path.join(ROOT, "tests", "blender", "visibility", "gpu_preview_check.py")
 OUT = os.path.join(ROOT, "docs", "visibility-gpu-preview-benchmark.md")
 
 

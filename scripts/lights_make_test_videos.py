@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Test data for the light-rig tool, made from Blender's bundled HDR worlds
 (datafiles/studiolights/world/*.exr) and from synthetic maps with known
-irradiance. Used by tests/python/test_lights*.py, tests/blender/test_lights*.py
+irradiance. Used by tests/python/test_lights*.py, tests/blender/lights/test_lights*.py
 and bench/lights_benchmark.py; run it alone to write a set into a folder:
 
     .venv/bin/python scripts/lights_make_test_videos.py out/light_videos

@@ -30,7 +30,6 @@ import json
 import math
 import os
 import re
-import sys
 import types
 
 import bmesh
@@ -45,10 +44,9 @@ from penumbra.colormap import operators as colormap_operators
 from penumbra.lights import operators as light_operators
 from penumbra.visibility import runtime
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_colormap import make_ramp_material, plane_with  # noqa: E402
-from test_lights import _rig_state, _sky_and_sun, _solid_angles, _world_with, _write_map  # noqa: E402
-from test_visibility import attribute, bake_op, character, uniform_world  # noqa: E402
+from colormap_scenes import make_ramp_material, plane_with
+from lights_scenes import _rig_state, _sky_and_sun, _solid_angles, _world_with, _write_map
+from visibility_scenes import attribute, bake_op, character, uniform_world
 
 
 @pytest.fixture

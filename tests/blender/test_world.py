@@ -9,7 +9,6 @@ read the World through it, see the same light."""
 import json
 import math
 import os
-import sys
 
 import bpy
 import mathutils
@@ -20,8 +19,7 @@ from penumbra import compat, native, world
 from penumbra.colormap import interface
 from penumbra.visibility import scene_data
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_lights import _directions, _sky_and_sun, _solid_angles  # noqa: E402
+from lights_scenes import _directions, _sky_and_sun, _solid_angles
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 SUN = np.array([0.4, -0.3, 0.8]) / np.linalg.norm([0.4, -0.3, 0.8])

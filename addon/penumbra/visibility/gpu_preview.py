@@ -16,7 +16,7 @@ the SpaceView3D draw callback uploads what changed and draws. Neither ever
 raises into Blender: problems go to the scene's `gpu_preview_status`.
 
 It matches the CPU shading to float rounding (shade_offscreen reads it back
-from an RGBA32F buffer, one vertex per pixel; tests/blender/test_gpu_preview.py
+from an RGBA32F buffer, one vertex per pixel; tests/blender/visibility/test_gpu_preview.py
 compares it under Xvfb and in the bpy 5.x module after gpu.init()).
 
 Limits: SH orders 1–8 and 1–4 lobes (everything a visibility model can

@@ -1,6 +1,6 @@
 """The GPU viewport preview's shading against the CPU's, per vertex, once per
-`make test` (tests/blender/test_gpu_preview.py covers the rest of the
-preview in every Blender, headless): tests/blender/gpu_preview_check.py in
+`make test` (tests/blender/visibility/test_gpu_preview.py covers the rest of the
+preview in every Blender, headless): tests/blender/visibility/gpu_preview_check.py in
 Debian's Blender 3.4 in a real window under Xvfb (Mesa's llvmpipe, OpenGL
 4.5), and in the bpy 5.2 module after gpu.init() (EGL, the same llvmpipe).
 These need only the `blender`, `xvfb-run` and .venv313 programs that
@@ -13,7 +13,7 @@ import shutil
 import subprocess
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-CHECK = os.path.join(ROOT, "tests", "blender", "gpu_preview_check.py")
+CHECK = os.path.join(ROOT, "tests", "blender", "visibility", "gpu_preview_check.py")
 # The goal: GPU and CPU shading of a vertex differ by at most this (absolute,
 # scene-linear; measured ~1e-5, float rounding).
 GPU_TOLERANCE = 1e-3

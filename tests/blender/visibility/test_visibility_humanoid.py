@@ -16,7 +16,7 @@ import penumbra
 from penumbra import native
 from penumbra.visibility import runtime, scene_data
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import visibility_humanoid  # noqa: E402
 

@@ -16,12 +16,14 @@ from mathutils import Vector
 from mathutils.bvhtree import BVHTree
 
 import penumbra
-from penumbra import compat, native
+from penumbra import native
 from penumbra.visibility import bake, runtime, scene_data
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import visibility_character  # noqa: E402
+
+from visibility_scenes import attribute, bake_op, character, uniform_world  # noqa: E402
 
 # Held-out error allowed (mean |Δ AO| over vertices and held-out frames); see
 # docs/visibility.md ("Accuracy threshold"). An absolute ceiling only: a
@@ -42,20 +44,6 @@ def addon(factory_scene):
         penumbra.unregister()
 
 
-def character(scene, tmp_path=None, frames=24):
-    obj, rig = visibility_character.build(frames=frames)
-    bpy.context.view_layer.objects.active = obj
-    obj.select_set(True)
-    return obj, rig
-
-
-def bake_op(tmp_dir, **kwargs):
-    args = dict(frame_start=1, frame_end=24, frame_step=2, rays=64, lobes=2,
-                filepath=os.path.join(str(tmp_dir), "model.pzh"))
-    args.update(kwargs)
-    return bpy.ops.penumbra.bake_visibility(**args)
-
-
 def clamped_cosine_zonal(order):
     """z_l = 2π ∫_0^1 μ Y_l0(μ) dμ, by Gauss–Legendre in numpy: AO of an SH
     visibility v in a vertex frame (normal +z) is Σ_l v[l(l+1)] z_l / π."""
@@ -66,22 +54,6 @@ def clamped_cosine_zonal(order):
         p_l = np.polynomial.legendre.legval(mu, [0] * l + [1])
         z.append(2 * math.pi * np.sum(w * mu * math.sqrt((2 * l + 1) / (4 * math.pi)) * p_l))
     return np.array(z)
-
-
-def attribute(obj, name, width):
-    data = obj.data.attributes[name].data
-    out = np.empty(len(data) * width, dtype=np.float32)
-    data.foreach_get("color" if width == 4 else "value", out)
-    return out.reshape(-1, width) if width > 1 else out
-
-
-def uniform_world(scene, rgb=(1.0, 1.0, 1.0), strength=1.0):
-    world = bpy.data.worlds.new("Uniform")
-    background = compat.ensure_nodes(world).nodes["Background"]
-    background.inputs["Color"].default_value = (*rgb, 1.0)
-    background.inputs["Strength"].default_value = strength
-    scene.world = world
-    return world
 
 
 def blender_ao(obj, indices, rays=400, seed=3):

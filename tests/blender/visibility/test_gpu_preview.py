@@ -20,7 +20,7 @@ from penumbra import compat, native
 from penumbra.visibility import gpu_preview, preview_shader, runtime
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(os.path.dirname(HERE))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import visibility_character  # noqa: E402
 
