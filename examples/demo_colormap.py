@@ -1,7 +1,10 @@
-"""Colour-map filtering demo: a Noise Texture through a sharp ColorRamp on a
-plane receding to the horizon; press "Bake Filtered Colour Map" (the operator
-penumbra.bake_colormap_lut) and render the plain ramp and Penumbra's node
-group at 4 samples per pixel, side by side. run(out_folder) -> dict."""
+"""Colour-map filtering demo (run inside Blender by examples/demo_blender.py):
+a Noise Texture through a sharp ColorRamp on a plane receding to the
+horizon. The plain ramp is rendered at 1 and 16 samples per pixel and, as
+the reference, at many samples over a crop near the horizon; then "Bake
+Filtered Colour Map" (penumbra.bake_colormap_lut) swaps in Penumbra's node
+group, rendered at 1 sample per pixel. The contact sheet shows the crops
+against the reference with their RMSE. run(out_folder, demo) -> dict."""
 
 import os
 import sys
@@ -10,56 +13,119 @@ import time
 import bpy
 import numpy as np
 
-from penumbra import native
-
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import colormap_scene  # noqa: E402  (examples/colormap_scene.py)
+import contact_sheet as cs  # noqa: E402  (examples/contact_sheet.py)
+import demo_render  # noqa: E402  (examples/demo_render.py)
+
+DIFFERENCE_SCALE = 0.25  # |Δ| (mean over RGB) at the bright end of the heat ramp
 
 
-def _scene(out_folder):
+def _settings(quick):
+    if quick:
+        return {"size": (288, 162), "crop": (108, 43, 180, 84), "enlarge": 6, "reference_spp": 64}
+    # crop: (x0, y0, x1, y1) in pixels from the top left, just below the
+    # horizon, where the noise is finer than a pixel and a plain ramp sparkles.
+    return {"size": (576, 324), "crop": (216, 86, 360, 167), "enlarge": 3, "reference_spp": 512}
+
+
+def _scene(out_folder, settings):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.use_denoising = False  # Debian's Blender has no OpenImageDenoise
-    scene.cycles.samples = 4
-    scene.render.resolution_x, scene.render.resolution_y = 192, 108
-    scene.render.resolution_percentage = 100
-    scene.render.image_settings.file_format = "OPEN_EXR"
+    demo_render.use_cycles(scene, *settings["size"])
+    world = bpy.data.worlds.new("black")  # the plane emits; nothing else lights anything
+    if bpy.app.version < (5, 0, 0):
+        world.use_nodes = True
+    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
+    if hasattr(world, "cycles"):
+        world.cycles.sampling_method = "NONE"
+    scene.world = world
     scene.penumbra.colormap.output_folder = out_folder
-    plane, material, ramp, emission, camera = colormap_scene.noise_ramp_plane()
-    return scene, material, ramp, emission
+    colormap_scene.noise_ramp_plane(roughness=0.5)  # as bench/colormap_render.py
+    return scene
 
 
-def _render(scene, out_folder, name):
-    scene.render.filepath = os.path.join(out_folder, name + ".exr")
+def _render(scene, out_folder, name, spp, crop=None):
+    """Renders (the crop only, when given) and returns (RGB, seconds)."""
+    render = scene.render
+    render.use_border = render.use_crop_to_border = crop is not None
+    if crop is not None:
+        width, height = render.resolution_x, render.resolution_y
+        x0, y0, x1, y1 = crop
+        render.border_min_x, render.border_max_x = x0 / width, x1 / width
+        render.border_min_y, render.border_max_y = 1.0 - y1 / height, 1.0 - y0 / height  # from the bottom
     started = time.perf_counter()
-    bpy.ops.render.render(write_still=True)
+    pixels = demo_render.render(scene, os.path.join(out_folder, name + ".exr"), spp, seed=1)
     seconds = time.perf_counter() - started
-    core = native.require()
-    image = core.image.read(scene.render.filepath)
-    srgb = np.where(image <= 0.0031308, 12.92 * image, 1.055 * np.power(np.clip(image, 0, None), 1 / 2.4) - 0.055)
-    png = os.path.join(out_folder, name + ".png")
-    core.image.write_png16(png, np.clip(srgb, 0, 1).astype(np.float32), "sRGB")
-    return image, png, seconds
+    render.use_border = render.use_crop_to_border = False
+    return pixels[..., :3], seconds
 
 
-def run(out_folder):
-    scene, material, ramp, emission = _scene(out_folder)
-    plain, plain_png, plain_s = _render(scene, out_folder, "plain_ramp_4spp")
+def _crop(image, crop):
+    x0, y0, x1, y1 = crop
+    return image[y0:y1, x0:x1]
+
+
+def run(out_folder, demo):
+    settings = _settings(demo.quick)
+    scene = _scene(out_folder, settings)
+    crop = settings["crop"]
+
+    # The plain ramp, and its reference over the crop.
     started = time.perf_counter()
-    result = bpy.ops.penumbra.bake_colormap_lut()
+    reference, reference_s = _render(scene, out_folder, f"reference_{settings['reference_spp']}spp",
+                                     settings["reference_spp"], crop)
+    plain1, plain1_s = _render(scene, out_folder, "plain_ramp_1spp", 1)
+    plain16, plain16_s = _render(scene, out_folder, "plain_ramp_16spp", 16)
+    plain_seconds = time.perf_counter() - started
+
+    started = time.perf_counter()
+    if bpy.ops.penumbra.bake_colormap_lut() != {"FINISHED"}:
+        raise RuntimeError("colour-map bake failed")
     bake_s = time.perf_counter() - started
-    filtered, filtered_png, filtered_s = _render(scene, out_folder, "penumbra_4spp")
+    material = bpy.data.materials["noise ramp"]
     group = material.node_tree.nodes["Penumbra Filtered Ramp"]
-    return {
-        "bake": sorted(result),
-        "bake_seconds": round(bake_s, 3),
-        "lookup_image": group.node_tree["penumbra_lookup"]["image"],
-        "pictures": [plain_png, filtered_png],
-        "render_seconds": {"plain": round(plain_s, 3), "penumbra": round(filtered_s, 3)},
-        "far_half_pixel_std": {  # the sparkle in the distance: lower is calmer
-            "plain": float(plain[: plain.shape[0] // 2].std(axis=(0, 1)).mean()),
-            "penumbra": float(filtered[: filtered.shape[0] // 2].std(axis=(0, 1)).mean()),
-        },
-    }
+    demo.step("colour-map lookup", group.node_tree["penumbra_lookup"]["image"], "", bake_s)
+    filtered, filtered_s = _render(scene, out_folder, "penumbra_1spp", 1)
+
+    results = []
+    for name, image, spp, seconds in (("plain ramp", plain1, 1, plain1_s), ("plain ramp", plain16, 16, plain16_s),
+                                      ("Penumbra filtered ramp", filtered, 1, filtered_s)):
+        part = _crop(image, crop)
+        results.append({"method": name, "spp": spp, "seconds": round(seconds, 3), "picture": part,
+                        "rmse": float(np.sqrt(((part - reference) ** 2).mean()))})
+    started = time.perf_counter()
+    sheet_path, size = _sheet(settings, reference, results, plain1, filtered, demo)
+    rmse = {f"{r['method']} {r['spp']} spp": r["rmse"] for r in results}
+    demo.step("colour-map sheet", f"{os.path.basename(sheet_path)}: 3 crops, {size[0]}×{size[1]}",
+              f"RMSE {results[0]['rmse']:.3f} plain → {results[2]['rmse']:.3f} Penumbra, 1 spp",
+              plain_seconds + filtered_s + time.perf_counter() - started)
+    for r in results:
+        r.pop("picture")
+    return {"bake_seconds": round(bake_s, 3), "reference_spp": settings["reference_spp"],
+            "reference_seconds": round(reference_s, 3), "crop": list(crop), "rmse": rmse, "renders": results,
+            "sheet": sheet_path}
+
+
+def _sheet(settings, reference, results, plain1, filtered, demo):
+    k = settings["enlarge"]
+    x0, y0, x1, y1 = settings["crop"]
+    sheet = cs.Sheet("Colour map: a sharp ColorRamp on noise, far away",
+                     f"Noise Texture through a two-stop ramp on a plane; Cycles; reference: the plain ramp "
+                     f"at {settings['reference_spp']} spp")
+    full = []
+    for image, label in ((plain1, "plain ramp, 1 spp"), (filtered, "Penumbra filtered ramp, 1 spp")):
+        picture = demo_render.display(image)
+        cs.outline(picture, x0 - 2, y0 - 2, x1 + 2, y1 + 2)
+        full.append(cs.Tile(picture, [label, "the box: the crop below"]))
+    sheet.row(full, "whole frame")
+    shown_reference = cs.enlarge(demo_render.display(reference), k)
+    for r in results:
+        difference = np.abs(r["picture"] - reference).mean(axis=-1)
+        sheet.row([cs.Tile(shown_reference, [f"reference, {settings['reference_spp']} spp"]),
+                   cs.Tile(cs.enlarge(demo_render.display(r["picture"]), k), [f"{r['method']}, {r['spp']} spp"]),
+                   cs.Tile(cs.enlarge(cs.heat(difference, DIFFERENCE_SCALE), k),
+                           [f"|difference|, 0 - {DIFFERENCE_SCALE:g}"])],
+                  f"{r['method']} at {r['spp']} spp: RMSE {r['rmse']:.4f}")
+    path = demo.sheet_path("colormap")
+    return path, sheet.write(path)
