@@ -22,11 +22,6 @@ STEPS = ["image I/O", "visibility model", "visibility sheet", "light rig", "ligh
          "colour-map lookup", "colour-map sheet"]
 MAX_PRINTED_LINES = 200
 
-pytestmark = pytest.mark.skipif(
-    "libasan" in os.environ.get("LD_PRELOAD", ""),
-    reason="the demo's Blenders load the Release add-on; this runs in make test-python")
-
-
 @pytest.fixture(scope="module")
 def quick_demo(tmp_path_factory):
     out = tmp_path_factory.mktemp("demo")
