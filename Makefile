@@ -63,10 +63,11 @@ PY_ASAN_ENV := LD_PRELOAD="$$(g++ -print-file-name=libasan.so) $$(g++ -print-fil
   PENUMBRA_ADDON_DIR=$(abspath $(ASAN_BUILD))/addon/penumbra
 # Left out of the Python run under ASan, and why (each runs in test-python):
 #   test_package.py: checks the zips in dist/, built from the Release build;
-#   test_gpu_preview_in_blender.py: runs Blenders, which load the Release add-on;
+#   test_gpu_preview_in_blender.py, test_demo.py: run Blenders, which load the Release add-on;
 #   test_only_the_module_init_symbol_is_exported: wants all three modules,
 #     the sanitizer build makes the 3.11 one only.
 PY_ASAN_SKIP := --ignore=tests/python/test_package.py --ignore=tests/python/visibility/test_gpu_preview_in_blender.py \
+  --ignore=tests/python/test_demo.py \
   --deselect tests/python/test_module.py::test_only_the_module_init_symbol_is_exported
 
 $(ASAN_BUILD)/CMakeCache.txt:
@@ -115,7 +116,7 @@ bench: build
 	$(VENV_PY) bench/run_all.py $(BENCH)
 
 demo: build
-	$(VENV_PY) examples/demo.py --out out
+	$(VENV_PY) examples/demo.py --out out --docs
 
 clean:
 	rm -rf $(BUILD) out dist
