@@ -38,6 +38,25 @@ double phi_difference(double a, double b) {
     return phi(b) * std::expm1(half_diff_sq);
 }
 
+// ∫_a^b C(v) N(v; mean, σ²) dv over a linear piece of C from colour ca at a
+// to cb at b, as wa·ca + wb·cb: with ΔΦ = `mass` and φ(za) − φ(zb) = `dphi`,
+// wb = ΔΦ/2 + g and wa = ΔΦ − wb, where
+//   g = ∫_a^b (v − x_mid)/(b − a) N dv = ((mean − x_mid) ΔΦ + σ (φ(za) − φ(zb))) / (b − a)
+// lies in [−ΔΦ/2, ΔΦ/2]. Weights, not a slope: a steep piece far from a huge
+// mean and σ made the slope form Inf·0 = NaN (fuzz crasher
+// steep_piece_under_huge_mean_and_sigma). Clamping g to its bounds keeps the
+// colour within the map's range whatever cancels.
+struct PieceWeights {
+    double a, b;
+};
+PieceWeights linear_piece_weights(double a, double b, double mean, double sigma, double mass, double dphi) {
+    double g = ((mean - 0.5 * (a + b)) * mass + sigma * dphi) / (b - a);
+    if (std::isnan(g)) g = 0.0;  // Inf − Inf or Inf / Inf: only at the ends of double's range
+    const double piece = std::max(mass, 0.0);  // rounding may leave −1e-17
+    const double wb = std::clamp(0.5 * piece + g, 0.0, piece);
+    return {piece - wb, wb};
+}
+
 }  // namespace
 
 void filtered_color(const ColorMap& map, double mean, double sigma, double* out) {
@@ -127,21 +146,10 @@ void filtered_color(const ColorMap& map, double mean, double sigma, double* out)
                 out[c] += mass * ca[c];
             continue;
         }
-        // ∫_a^b (c_mid + s (v − x_mid)) N(v; mean, σ²) dv with v = mean + σ z
-        // is wa·ca + wb·cb with wb = ΔΦ/2 + g, wa = ΔΦ − wb, where
-        //   g = ∫_a^b (v − x_mid)/(b − a) N dv = ((mean − x_mid) ΔΦ + σ (φ(za) − φ(zb))) / (b − a)
-        // lies in [−ΔΦ/2, ΔΦ/2]. Weights, not a slope: a steep piece far
-        // from a huge mean and σ made the slope form Inf·0 = NaN (fuzz
-        // crasher steep_piece_under_huge_mean_and_sigma). Clamping g to its
-        // bounds keeps the colour within the map's range whatever cancels.
         const double* cb = map.color(k + 1);
-        const double x_mid = 0.5 * (a + b);
-        double g = ((mean - x_mid) * mass + sigma * dphi) / (b - a);
-        if (std::isnan(g)) g = 0.0;  // Inf − Inf or Inf / Inf: only at the ends of double's range
-        const double piece = std::max(mass, 0.0);  // rounding may leave −1e-17
-        const double wb = std::clamp(0.5 * piece + g, 0.0, piece), wa = piece - wb;
+        const PieceWeights w = linear_piece_weights(a, b, mean, sigma, mass, dphi);
         for (int c = 0; c < channels; ++c)
-            out[c] += wa * ca[c] + wb * cb[c];
+            out[c] += w.a * ca[c] + w.b * cb[c];
     }
 }
 
