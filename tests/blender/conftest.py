@@ -23,3 +23,19 @@ def factory_scene():
     """A clean, empty file for each test that needs one."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     yield bpy.context.scene
+
+
+@pytest.fixture
+def addon(factory_scene):
+    """The add-on registered on a clean file: lookup images beside the test's
+    files, no World lighting or visibility model cached from another test."""
+    import penumbra
+    from penumbra.visibility import runtime, scene_data
+    penumbra.register()
+    factory_scene.penumbra.colormap.output_folder = ""
+    scene_data._lighting_cache.clear()
+    try:
+        yield factory_scene
+    finally:
+        runtime.forget()
+        penumbra.unregister()

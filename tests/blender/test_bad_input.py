@@ -37,7 +37,6 @@ import bpy
 import numpy as np
 import pytest
 
-import penumbra
 from penumbra import native
 from penumbra.colormap import node_groups
 from penumbra.colormap import operators as colormap_operators
@@ -47,17 +46,6 @@ from penumbra.visibility import runtime
 from colormap_scenes import make_ramp_material, plane_with
 from lights_scenes import _rig_state, _sky_and_sun, _solid_angles, _world_with, _write_map
 from visibility_scenes import attribute, bake_op, character, uniform_world
-
-
-@pytest.fixture
-def addon(factory_scene):
-    penumbra.register()
-    factory_scene.penumbra.colormap.output_folder = ""
-    try:
-        yield factory_scene
-    finally:
-        runtime.forget()
-        penumbra.unregister()
 
 
 # What a failed operator must leave as it was ---------------------------------------

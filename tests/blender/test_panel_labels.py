@@ -43,7 +43,6 @@ import blf
 import bpy
 import pytest
 
-import penumbra
 from penumbra import native
 
 # Pixels at UI scale 1 (see the module docstring).
@@ -358,15 +357,6 @@ def light_rig_states(scene):
                        "penumbra/shots/sh010/penumbra_light_rig.json; replaced 3 NaN, 0 Inf and 12 negative "
                        "pixel values by 0")
     return rig
-
-
-@pytest.fixture
-def addon(factory_scene):
-    penumbra.register()
-    try:
-        yield
-    finally:
-        penumbra.unregister()
 
 
 SCENES = {

@@ -27,17 +27,6 @@ OTHER_SUN = np.array([-0.5, 0.6, 0.3]) / np.linalg.norm([-0.5, 0.6, 0.3])
 ORDER = 4
 
 
-@pytest.fixture
-def addon(factory_scene):
-    import penumbra
-    penumbra.register()
-    scene_data._lighting_cache.clear()
-    try:
-        yield factory_scene
-    finally:
-        penumbra.unregister()
-
-
 def _core():
     return native.require()
 

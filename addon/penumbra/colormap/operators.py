@@ -16,7 +16,7 @@ import bpy
 import numpy as np
 
 from . import node_groups, noise_statistics, ramp as ramp_io
-from .. import color, native
+from .. import color, native, world
 from ..compat import socket_is, uses_nodes
 
 
@@ -35,17 +35,6 @@ def _editable_material(context):
     if not uses_nodes(material):
         raise BakeError(f"Material '{material.name}' does not use nodes: there is no ColorRamp to filter")
     return material
-
-
-def _unreadable(image):
-    """Why an image has no pixels, and what to do."""
-    if image.source in {"FILE", "SEQUENCE", "MOVIE"} and image.packed_file is None:
-        path = bpy.path.abspath(image.filepath, library=image.library)
-        if not os.path.isfile(path):
-            return f"its file '{path}' is missing; point the image at an existing file"
-        return (f"Blender could not read its file '{path}' (empty, zero-sized or damaged?); "
-                "replace it with a readable image")
-    return "the image is empty; fill it or choose another image"
 
 
 def _pixel_size(scene):
@@ -161,7 +150,7 @@ class BakePlan:
             raise BakeError(f"No image named '{image_name}'")
         width, height = image.size
         if width < 1 or height < 1:
-            raise BakeError(f"Image '{image_name}' has no pixels: {_unreadable(image)}")
+            raise BakeError(f"Image '{image_name}' has no pixels: {world.unreadable(image)}")
         pixels = np.empty(width * height * 4, np.float32)
         image.pixels.foreach_get(pixels)
         row = pixels.reshape(height, width, 4)[height // 2]  # the middle row is the colour map

@@ -17,16 +17,6 @@ from lights_scenes import (_core, _directions, _ensure_nodes, _rig_state, _sky_a
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
 
-@pytest.fixture
-def addon(factory_scene):
-    import penumbra
-    penumbra.register()
-    try:
-        yield factory_scene
-    finally:
-        penumbra.unregister()
-
-
 def _map_irradiance(img, normals):
     """Independent numpy reference: Σ L Ω max(0, n·ω)."""
     h, w = img.shape[:2]

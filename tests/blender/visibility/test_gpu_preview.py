@@ -25,17 +25,6 @@ sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import visibility_character  # noqa: E402
 
 
-
-@pytest.fixture
-def addon(factory_scene):
-    penumbra.register()
-    try:
-        yield factory_scene
-    finally:
-        runtime.forget()
-        penumbra.unregister()
-
-
 def attributes(obj):
     mesh = obj.data
     rgba = np.empty(len(mesh.vertices) * 4, dtype=np.float32)

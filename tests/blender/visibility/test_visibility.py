@@ -15,9 +15,8 @@ import pytest
 from mathutils import Vector
 from mathutils.bvhtree import BVHTree
 
-import penumbra
 from penumbra import native
-from penumbra.visibility import bake, runtime, scene_data
+from penumbra.visibility import bake, scene_data
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
@@ -32,16 +31,6 @@ from visibility_scenes import attribute, bake_op, character, uniform_world  # no
 HOLDOUT_AO_THRESHOLD = 0.03
 # Handler output vs Blender's own ray-cast AO on unseen poses; see docs/visibility.md.
 INDEPENDENT_AO_THRESHOLD = 0.04
-
-
-@pytest.fixture
-def addon(factory_scene):
-    penumbra.register()
-    try:
-        yield factory_scene
-    finally:
-        runtime.forget()
-        penumbra.unregister()
 
 
 def clamped_cosine_zonal(order):
