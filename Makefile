@@ -3,7 +3,7 @@
 #   make test   install what is missing, build, package, run every test
 # and `make build` to build alone, `make package` for the installable zips.
 .PHONY: deps build package test test-cpp test-python test-blender demo bench clean
-.PHONY: build-sanitize test-sanitize test-fuzz-python build-fuzz fuzz fuzz-seeds
+.PHONY: build-sanitize test-sanitize test-fuzz-python build-fuzz fuzz fuzz-table fuzz-seeds
 
 JOBS ?= $(shell nproc)
 BUILD ?= build
@@ -90,6 +90,8 @@ test-fuzz-python: deps
 # build-fuzz: the libFuzzer harnesses (Debian's clang-14). `make fuzz` runs
 # each for FUZZ_SECONDS, adds what it finds new to the corpus (minimized)
 # and stops at the first crash, leaving the input in tests/fuzz/<name>/crashers/.
+# Its figures go to docs/reliability-fuzz.md (tests/fuzz/fuzz_table.py);
+# `make fuzz-table` rewrites that from the last run's summary lines.
 FUZZ_BUILD ?= build-fuzz
 FUZZ_SECONDS ?= 60
 FUZZ_HARNESSES ?= visibility_file image_file image_sequence video_decoder video_file color_ramp colormap_lookup
@@ -105,6 +107,9 @@ build-fuzz: deps $(FUZZ_BUILD)/CMakeCache.txt
 fuzz: build-fuzz
 	FUZZ_SECONDS=$(FUZZ_SECONDS) PENUMBRA_FFMPEG=$(abspath .deps/imageio-ffmpeg-0.6.0/bin/ffmpeg) \
 	  tests/fuzz/run_fuzzers.sh $(FUZZ_BUILD) $(VENV_PY) "$(FUZZ_HARNESSES)" "$(FUZZ_PYTHON_HARNESSES)"
+
+fuzz-table:
+	python3 tests/fuzz/fuzz_table.py $(FUZZ_BUILD)/fuzz-logs/fuzz-summary.txt docs/reliability-fuzz.md
 
 # Rewrites the seeds that code makes (tests/fuzz/make_seeds.*).
 fuzz-seeds: build-sanitize
