@@ -18,6 +18,7 @@ import numpy as np
 from . import node_groups, noise_statistics, ramp as ramp_io
 from .. import color, native, world
 from ..compat import socket_is, uses_nodes
+from ..errors import CORE_ERRORS, describe
 
 
 class BakeError(Exception):
@@ -453,8 +454,8 @@ class PENUMBRA_OT_bake_colormap_lut(bpy.types.Operator):
     def _plan(self, context):
         try:
             return BakePlan(context, context.scene.penumbra.colormap, self.image_name)
-        except (BakeError, RuntimeError, ValueError) as error:
-            self.report({"ERROR"}, str(error))
+        except (BakeError, *CORE_ERRORS) as error:
+            self.report({"ERROR"}, describe(error))
             return None
 
     def execute(self, context):
@@ -466,8 +467,8 @@ class PENUMBRA_OT_bake_colormap_lut(bpy.types.Operator):
         try:
             lut = plan.compute(progress=lambda f: wm.progress_update(int(100 * f)) or True)
             result = plan.apply(lut)
-        except (BakeError, ValueError, OSError, RuntimeError) as error:
-            self.report({"ERROR"}, f"Nothing was changed: {error}")
+        except (BakeError, *CORE_ERRORS) as error:
+            self.report({"ERROR"}, f"Nothing was changed: {describe(error)}")
             return {"CANCELLED"}
         finally:
             wm.progress_end()
@@ -517,8 +518,8 @@ class PENUMBRA_OT_bake_colormap_lut(bpy.types.Operator):
             return {"CANCELLED"}
         try:
             result = state["plan"].apply(state["lut"])
-        except (BakeError, ValueError, OSError, RuntimeError) as error:
-            self.report({"ERROR"}, f"Nothing was changed: {error}")
+        except (BakeError, *CORE_ERRORS) as error:
+            self.report({"ERROR"}, f"Nothing was changed: {describe(error)}")
             return {"CANCELLED"}
         _report_done(self, state["plan"], result)
         return {"FINISHED"}
@@ -534,7 +535,7 @@ class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):
         try:
             material = _editable_material(context)
         except BakeError as error:
-            self.report({"ERROR"}, str(error))
+            self.report({"ERROR"}, describe(error))
             return {"CANCELLED"}
         tree = material.node_tree
         group_node = tree.nodes.active

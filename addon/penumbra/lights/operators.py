@@ -17,6 +17,7 @@ import numpy as np
 from .. import color, native, world
 from . import rig_objects, settings
 from ..core_settings import limits
+from ..errors import CORE_ERRORS, describe
 
 PREVIEW_NAME = "Penumbra Light Rig Preview"
 _SETTING_NAMES = ("filepath", "mapping", "colorspace", "count", "sampler", "power", "blue_noise",
@@ -226,8 +227,8 @@ class PENUMBRA_OT_build_light_rig(bpy.types.Operator):
             finally:
                 wm.progress_end()
             msg, bad = job.apply()
-        except (ValueError, OSError, RuntimeError) as error:
-            self.report({"ERROR"}, str(error))
+        except CORE_ERRORS as error:
+            self.report({"ERROR"}, describe(error))
             return {"CANCELLED"}
         self.report({"WARNING"} if bad else {"INFO"}, msg)
         return {"FINISHED"}
@@ -236,8 +237,8 @@ class PENUMBRA_OT_build_light_rig(bpy.types.Operator):
         self._take_scene_defaults(context)
         try:
             self._job = self._start(context)
-        except (ValueError, OSError, RuntimeError) as error:
-            self.report({"ERROR"}, str(error))
+        except CORE_ERRORS as error:
+            self.report({"ERROR"}, describe(error))
             return {"CANCELLED"}
         wm = context.window_manager
         wm.progress_begin(0, self._job.frames)
@@ -269,9 +270,9 @@ class PENUMBRA_OT_build_light_rig(bpy.types.Operator):
                 return {"RUNNING_MODAL"}
             self._stop(context)
             msg, bad = job.apply()
-        except (ValueError, OSError, RuntimeError) as error:
+        except CORE_ERRORS as error:
             self._stop(context)
-            self.report({"ERROR"}, str(error))
+            self.report({"ERROR"}, describe(error))
             return {"CANCELLED"}
         self.report({"WARNING"} if bad else {"INFO"}, msg)
         return {"FINISHED"}

@@ -11,6 +11,7 @@ import bpy
 
 from .. import native
 from ..core_settings import limits
+from ..errors import CORE_ERRORS, describe
 from .bake import BakeJob, bake_frames, fit_model, resolve_path, store_result, summary_of
 from .material import SHADING_ATTRIBUTE, setup_material
 from .runtime import shade_object
@@ -115,8 +116,8 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
     def execute(self, context):
         try:
             self._start(context)
-        except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
-            self.report({"ERROR"}, str(error))
+        except (VisibilityInputError, *CORE_ERRORS) as error:
+            self.report({"ERROR"}, describe(error))
             return {"CANCELLED"}
         job = self._job
         last = [0.0]
@@ -137,9 +138,9 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
             self._fit_started = time.perf_counter()
             result = fit_model(job.training, job.influence, self._settings["lobes"], job.threads, printer("fit"))
             self._finish(context, result, seconds_bake)
-        except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
+        except (VisibilityInputError, *CORE_ERRORS) as error:
             job.restore_frame()
-            self.report({"ERROR"}, str(error))
+            self.report({"ERROR"}, describe(error))
             return {"CANCELLED"}
         return {"FINISHED"}
 
@@ -149,8 +150,8 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
             return self.execute(context)
         try:
             self._start(context)
-        except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
-            self.report({"ERROR"}, str(error))
+        except (VisibilityInputError, *CORE_ERRORS) as error:
+            self.report({"ERROR"}, describe(error))
             return {"CANCELLED"}
         self._cancel = False
         self._fraction = 0.0
@@ -211,7 +212,7 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
             elif self._phase == "fit":
                 self._finish(context, self._result, self._seconds_bake)
                 return self._stop(context, None, finished=True)
-        except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
+        except (VisibilityInputError, *CORE_ERRORS) as error:
             return self._stop(context, error)
         self._show_progress(context)
         return {"RUNNING_MODAL"}
@@ -242,7 +243,7 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
         if error is None or isinstance(error, native.require().Cancelled):
             self.report({"WARNING"}, "Visibility bake cancelled; the earlier model is untouched")
         else:
-            self.report({"ERROR"}, str(error))
+            self.report({"ERROR"}, describe(error))
         return {"CANCELLED"}
 
 
@@ -261,9 +262,9 @@ class PENUMBRA_OT_apply_visibility(bpy.types.Operator):
         obj = context.active_object
         try:
             rgb, ao, info = shade_object(obj, context.scene, check_topology=True)
-        except (VisibilityInputError, ValueError, RuntimeError, OSError) as error:
-            obj.penumbra_visibility.status = str(error)  # the panel shows it
-            self.report({"ERROR"}, str(error))
+        except (VisibilityInputError, *CORE_ERRORS) as error:
+            obj.penumbra_visibility.status = describe(error)  # the panel shows it
+            self.report({"ERROR"}, describe(error))
             return {"CANCELLED"}
         obj.penumbra_visibility.status = ""
         self.report({"INFO"}, f"Shaded {len(ao)} vertices of '{obj.name}' (mean visibility {float(ao.mean()):.3f})")
@@ -287,7 +288,7 @@ class PENUMBRA_OT_setup_material(bpy.types.Operator):
         try:
             material = setup_material(context.active_object)
         except ValueError as error:
-            self.report({"ERROR"}, str(error))
+            self.report({"ERROR"}, describe(error))
             return {"CANCELLED"}
         self.report({"INFO"}, f"Material '{material.name}' now shows {SHADING_ATTRIBUTE}")
         return {"FINISHED"}
