@@ -20,8 +20,8 @@ if "bpy" in locals():
     # Re-running the add-on's __init__ (F8 / script reload): reload submodules
     # so edits take effect, in dependency order.
     import importlib
-    for _name in ("native", "color", "compat", "core_settings", "world", "sidebar", "visibility", "lights", "colormap",
-                  "properties", "preferences", "panels"):
+    for _name in ("native", "errors", "color", "compat", "core_settings", "world", "sidebar", "visibility", "lights",
+                  "colormap", "properties", "preferences", "panels"):
         if _name in locals():
             importlib.reload(locals()[_name])
 

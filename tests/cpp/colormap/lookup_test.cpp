@@ -136,6 +136,35 @@ TEST(Lookup, huge_sigma_max_gives_a_finite_table) {
     EXPECT_NEAR(table.at(10, 7, 0), 0.0f, 1e-6);
 }
 
+TEST(Lookup, steep_piece_under_huge_mean_and_sigma_stays_within_the_maps_range) {
+    // Found by fuzzing: a piece 1e-300 wide rising by 1 has slope 1e300; at
+    // a mean and σ of 1e250 its mass underflows to 0 and Inf·0 gave NaN.
+    const ColorMap map = color_map_from_knots({0.0, 1e-300, 1.0}, {0.0, 1.0, 0.5}, 1, MapInterpolation::linear);
+    for (double mean : {-1e250, 0.0, 1e250})
+        for (double sigma : {1e-200, 1.0, 1e248, 1e250}) {
+            double out = -1.0;
+            filtered_color(map, mean, sigma, &out);
+            EXPECT_TRUE(out >= 0.0 && out <= 1.0) << "mean " << mean << " sigma " << sigma << ": " << out;
+        }
+}
+
+TEST(Lookup, a_nan_probe_or_an_overflowing_mean_range_is_an_argument_error) {
+    const float colors[] = {0.0f, 1.0f};
+    const ColorMap map = color_map_from_samples(colors, 2, 1);
+    const LookupSpec spec{8, 8, 0.25, 0.0, 1.0};
+    const Image table = build_lookup(map, spec);
+    double out;
+    EXPECT_THROW(bilinear_lookup(table, spec, std::nan(""), 0.1, &out), ArgumentError);
+    EXPECT_THROW(bilinear_lookup(table, spec, 0.5, std::nan(""), &out), ArgumentError);
+    // Both ends finite, the width not: the table would be all NaN.
+    EXPECT_THROW(build_lookup(map, {8, 8, 0.25, -1e308, 1e308}), ArgumentError);
+}
+
+TEST(Lookup, colours_beyond_float32_are_an_argument_error_not_inf_texels) {
+    const ColorMap map = color_map_from_knots({0.0, 1.0}, {0.0, 1e103}, 1, MapInterpolation::linear);
+    EXPECT_THROW(build_lookup(map, {8, 8, 0.25, 0.0, 1.0}), ArgumentError);
+}
+
 TEST(Lookup, progress_can_cancel_and_reports_completion) {
     const float colors[] = {0.0f, 1.0f};
     const ColorMap map = color_map_from_samples(colors, 2, 1);
