@@ -13,7 +13,7 @@ import bpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "build", "addon"))
-sys.path.insert(0, os.path.join(ROOT, "examples"))
+sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
 import colormap_scene  # noqa: E402
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402

@@ -181,7 +181,7 @@ def shadowed_comparison():
             f.write(SHADOW_SCRIPT)
         res = subprocess.run([python, script, os.path.join(ROOT, "build", "addon"), tmp,
                               ",".join(str(n) for n in SHADOW_COUNTS), str(SHADOW_SPP),
-                              os.path.join(ROOT, "examples")],
+                              os.path.join(ROOT, "examples", "scenes")],
                              capture_output=True, text=True, timeout=1200)
         line = [x for x in res.stdout.splitlines() if x.startswith("RESULT ")]
         if res.returncode != 0 or not line:

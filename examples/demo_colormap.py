@@ -13,8 +13,8 @@ import time
 import bpy
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import colormap_scene  # noqa: E402  (examples/colormap_scene.py)
+sys.path[:0] = [os.path.dirname(os.path.abspath(__file__)), os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenes")]
+import colormap_scene  # noqa: E402  (examples/scenes/colormap_scene.py)
 import contact_sheet as cs  # noqa: E402  (examples/contact_sheet.py)
 import demo_render  # noqa: E402  (examples/demo_render.py)
 

@@ -16,10 +16,10 @@ import numpy as np
 
 from penumbra import native
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path[:0] = [os.path.dirname(os.path.abspath(__file__)), os.path.join(os.path.dirname(os.path.abspath(__file__)), "scenes")]
 import contact_sheet as cs  # noqa: E402  (examples/contact_sheet.py)
 import demo_render  # noqa: E402  (examples/demo_render.py)
-import light_rig_scene  # noqa: E402  (examples/light_rig_scene.py)
+import light_rig_scene  # noqa: E402  (examples/scenes/light_rig_scene.py)
 
 HDRI = "sunrise.exr"
 MAPPING_DEGREES = 30.0  # the World's Mapping node turns the map about Z

@@ -159,7 +159,7 @@ def _compare_pose(obj, scene, frame, settings, out_folder, materials, heads):
 
 
 def run(out_folder, demo):
-    sys.path.insert(0, os.path.join(ROOT, "scripts"))
+    sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
     import visibility_character
 
     settings = _settings(demo.quick)

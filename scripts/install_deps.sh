@@ -20,7 +20,7 @@ DEBIAN_PACKAGES=(
                           # real window examples/panel_screenshot.py photographs the sidebar in
   python3-venv            # the virtual environments below
   python3-pytest python3-numpy  # pytest and numpy inside Debian's Blender (it runs the system Python)
-  assimp-testmodels       # CMU motion capture (BVH) that drives scripts/visibility_humanoid.py, the realistic test character
+  assimp-testmodels       # CMU motion capture (BVH) that drives examples/scenes/visibility_humanoid.py, the realistic test character
   clang-14 libclang-rt-14-dev   # libFuzzer harnesses of tests/fuzz (make fuzz; docs/reliability.md)
   llvm-14                 # llvm-symbolizer-14: source lines in the fuzzers' reports
 )

@@ -18,7 +18,7 @@ import bpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 # Scene builders only: plain bpy scripts, no Penumbra code in them.
-sys.path[:0] = [os.path.join(ROOT, "examples"), os.path.join(ROOT, "scripts")]
+sys.path[:0] = [os.path.join(ROOT, "examples", "scenes")]
 
 EXTENSION = bpy.app.version >= (4, 2, 0)
 MODULE = "bl_ext.user_default.penumbra" if EXTENSION else "penumbra"

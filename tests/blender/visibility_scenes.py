@@ -9,7 +9,7 @@ import numpy as np
 from penumbra import compat
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
+sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
 import visibility_character  # noqa: E402
 
 

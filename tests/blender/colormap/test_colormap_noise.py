@@ -11,8 +11,8 @@ import pytest
 
 from penumbra import native
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))), "examples"))
-import colormap_scene  # noqa: E402  (the scene users can copy, examples/colormap_scene.py)
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))), "examples", "scenes"))
+import colormap_scene  # noqa: E402  (the scene users can copy, examples/scenes/colormap_scene.py)
 from penumbra.colormap import interface, node_groups
 
 def _noise_evaluator():

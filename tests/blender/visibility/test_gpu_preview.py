@@ -21,7 +21,7 @@ from penumbra.visibility import gpu_preview, preview_shader, runtime
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
+sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
 import visibility_character  # noqa: E402
 
 

@@ -19,7 +19,7 @@ from penumbra import native
 from penumbra.visibility import bake, scene_data
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
+sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
 import visibility_character  # noqa: E402
 
 from visibility_scenes import attribute, bake_op, character, uniform_world  # noqa: E402

@@ -1,4 +1,4 @@
-"""The realistic test character (scripts/visibility_humanoid.py): a skin
+"""The realistic test character (examples/scenes/visibility_humanoid.py): a skin
 around the CMU motion-capture skeleton of assimp-testmodels' 01_01.bvh, with
 Blender's automatic weights, built small here. Checks it is what the
 benchmark needs — a closed, outward skin, smooth weights, a moving skeleton
@@ -17,7 +17,7 @@ from penumbra import native
 from penumbra.visibility import runtime, scene_data
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
+sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
 import visibility_humanoid  # noqa: E402
 
 FRAMES = 16

@@ -28,7 +28,7 @@ one system per bone).
 Inside Blender (tests, benchmarks):
     import visibility_humanoid; mesh, armature = visibility_humanoid.build(detail=1, frames=48)
 As a script, writes a .blend:
-    blender -b --factory-startup --python scripts/visibility_humanoid.py -- --out humanoid.blend [--detail 1] [--frames 48]
+    blender -b --factory-startup --python examples/scenes/visibility_humanoid.py -- --out humanoid.blend [--detail 1] [--frames 48]
 Runs in Debian's Blender 3.4 and the bpy 4.5 and 5.2 modules.
 """
 

@@ -9,7 +9,7 @@ the elbows, so limbs occlude the body and each other.
 Inside Blender (tests, benchmarks, the demo):
     import visibility_character; mesh, armature = visibility_character.build()
 As a script, writes a .blend:
-    blender -b --factory-startup --python scripts/visibility_character.py -- --out character.blend [--detail 2]
+    blender -b --factory-startup --python examples/scenes/visibility_character.py -- --out character.blend [--detail 2]
 """
 
 import math
