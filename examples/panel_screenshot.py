@@ -166,9 +166,11 @@ def _in_blender(output):
         _load_addon()
         _build_scene()
     except Exception:
+        # Quit as a user would; no screenshot is written, which screenshot()
+        # reports, with this traceback in the log.
         traceback.print_exc()
-        sys.stdout.flush()
-        os._exit(1)  # else Blender's window stays open
+        bpy.ops.wm.quit_blender()
+        return
     steps = [_open_sidebar, _show_penumbra_tab, None, None, lambda w: _save_sidebar(w, output)]
 
     def step():
@@ -180,9 +182,8 @@ def _in_blender(output):
                 return 0.5
             bpy.ops.wm.quit_blender()
         except Exception:
-            traceback.print_exc()
-            sys.stdout.flush()
-            os._exit(1)  # a timer's exception would leave Blender running
+            traceback.print_exc()  # no screenshot: screenshot() reports it
+            bpy.ops.wm.quit_blender()
         return None
 
     bpy.app.timers.register(step, first_interval=1.0)
