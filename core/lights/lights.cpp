@@ -26,18 +26,6 @@ double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
-}  // namespace
-
-PowerMode parse_power_mode(const char* name) {
-    std::string s(name ? name : "");
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (s == "equal") return PowerMode::equal;
-    if (s == "region") return PowerMode::region;
-    throw ArgumentError("unknown power mode '" + std::string(name ? name : "") + "'; use 'EQUAL' or 'REGION'");
-}
-
-namespace {
-
 void check_light_count(const EnvironmentMap& map, const LightOptions& options) {
     const std::size_t cells = std::size_t(map.width) * map.height;
     if (options.count < 1)

@@ -38,7 +38,6 @@
 namespace penumbra::lights {
 
 enum class PowerMode { equal, region };
-PowerMode parse_power_mode(const char* name);  // "equal" / "region", any case
 
 struct LightOptions {
     int count = 64;                 // N, at most the map's cell count

@@ -35,17 +35,6 @@ void from_circle(int width, int height, double u, double v, double& x, double& y
 
 }  // namespace
 
-Projection parse_projection(const char* name) {
-    std::string s(name ? name : "");
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (s == "equirectangular" || s == "latlong") return Projection::equirectangular;
-    if (s == "hemisphere_polar" || s == "polar") return Projection::hemisphere_polar;
-    if (s == "fisheye") return Projection::fisheye;
-    if (s == "mirror_ball") return Projection::mirror_ball;
-    throw ArgumentError("unknown mapping '" + std::string(name ? name : "") +
-                        "'; use 'equirectangular', 'hemisphere_polar', 'fisheye' or 'mirror_ball'");
-}
-
 const char* projection_name(Projection projection) {
     switch (projection) {
     case Projection::equirectangular: return "equirectangular";

@@ -42,9 +42,6 @@ namespace penumbra::lights {
 
 enum class Projection { equirectangular, hemisphere_polar, fisheye, mirror_ball };
 
-// Parses "equirectangular", "hemisphere_polar", "fisheye", "mirror_ball"
-// (also the upper-case names the add-on uses); ArgumentError otherwise.
-Projection parse_projection(const char* name);
 const char* projection_name(Projection projection);
 
 // Kannala–Brandt coefficients k1..k4 of a fisheye lens (all 0: equidistant).

@@ -290,14 +290,6 @@ LuminanceDistribution luminance_distribution(const EnvironmentMap& map, const st
     return d;
 }
 
-SamplerKind parse_sampler(const char* name) {
-    std::string s(name ? name : "");
-    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (s == "standard") return SamplerKind::standard;
-    if (s == "havran") return SamplerKind::havran;
-    throw ArgumentError("unknown sampler '" + std::string(name ? name : "") + "'; use 'HAVRAN' or 'STANDARD'");
-}
-
 std::unique_ptr<Sampler> make_sampler(SamplerKind kind, const LuminanceDistribution& distribution) {
     if (distribution.width < 1 || distribution.height < 1 ||
         distribution.weight.size() != std::size_t(distribution.width) * distribution.height)

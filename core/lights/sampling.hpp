@@ -60,7 +60,6 @@ LuminanceDistribution luminance_distribution(const EnvironmentMap& map,
                                              int threads = 0);
 
 enum class SamplerKind { standard, havran };
-SamplerKind parse_sampler(const char* name);  // "standard" / "havran", any case
 
 struct Sample {
     Eigen::Vector3d direction;
