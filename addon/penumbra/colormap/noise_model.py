@@ -1,0 +1,422 @@
+"""The noise that drives a filtered ColorRamp, read as a linear combination of
+Detail-0 octaves (bpy side):
+
+    value = offset + Σ_i c_i · (Fac_i − 0.5)
+
+Fac_i is a normalized Noise Texture at Detail 0 (Fac = 0.5·snoise + 0.5) with
+Scale·lacunarity^i, evaluated at the noise's own, possibly distorted, position.
+read_noise() turns a Noise Texture (Blender 3.4 and 4.x/5.x) or a Musgrave
+Texture (3.x; 4.1 folded it into the Noise Texture's types) into a NoiseModel,
+or raises NoiseNotDerivable naming the node and the setting that makes that
+impossible. distorted_vector() and octave_fac() build the node arithmetic
+that rebuilds each octave, distortion included.
+
+Blender's definitions (Cycles intern/cycles/kernel/svm/, tags v3.4.0 and
+v4.5.0 and branch release/5.2 of blender/cycles; blenlib's noise.cc, which
+geometry nodes use, is the same). s(p) is snoise (Perlin noise scaled to
+about [−1, 1], noise.h), p = Vector·Scale (1D: W·Scale; 4D: (Vector, W)·Scale):
+
+- Distortion d (noisetex.h, noise_texture_{1,2,3,4}d, every version): if
+  d ≠ 0, component k of p moves by d·s(p + o_k) before the fractal is
+  evaluated; o_k = random_float{,2,3,4}_offset(k), every component
+  100 + 100·hash (Jenkins lookup3 on the float's bits: 1D hash_uint(seed),
+  2D-4D hash_uint2(seed, component); util/hash.h).
+- fBm (3.4 fractal_noise.h fractal_noise_*d; 4.x/5.x fractal_noise.h
+  noise_fbm): Detail clamped to [0, 15], n = ⌊Detail⌋, f = Detail − n;
+  octave i ≤ n is s(lacunarity^i·p) with amplitude r^i, octave n + 1 (if
+  f ≠ 0) with f·r^(n+1). Normalized: 0.5 + 0.5·mix(Σ/M_n, Σ'/M_(n+1), f)
+  (noise_statistics.octave_weights). Unnormalized (4.x `normalize` off):
+  Σ_(i≤n) r^i s_i + f r^(n+1) s_(n+1), so c_i = 2 r^i, offset 0. 3.4 clamps
+  the Roughness r to [0, 1] and has lacunarity 2; 4.x clamps r to ≥ 0 only.
+- Musgrave fBm (3.4 musgrave.h noise_musgrave_fBm_*d, svm_node_tex_musgrave):
+  H = max(Dimension, 1e-5), lacunarity L = max(Lacunarity, 1e-5), Detail
+  clamped to [0, 15], n = ⌊Detail⌋: Σ_(i<n) s_i L^(−H i) + f s_n L^(−H n)
+  (n octaves, not n + 1; Detail 0 is 0 everywhere); no distortion.
+- Multifractal, hybrid multifractal, hetero terrain (products of octaves) and
+  ridged multifractal (|s|²) are nonlinear; only their one-octave settings
+  are linear (see _one_octave_noise, _one_octave_musgrave)."""
+
+import dataclasses
+import math
+import struct
+from collections import namedtuple
+
+import bpy
+
+from . import noise_statistics
+
+NOISE = "ShaderNodeTexNoise"
+MUSGRAVE = "ShaderNodeTexMusgrave"
+_LABELS = {NOISE: "Noise Texture", MUSGRAVE: "Musgrave Texture"}
+_AXES = {"1D": 1, "2D": 2, "3D": 3, "4D": 4}
+# The inputs the filter takes as links (group inputs); any other input that
+# shapes the value must be a number the model can read.
+LINKABLE = ("Vector", "W", "Scale")
+_FROM_IMAGE = "bake the lookup from an image of the colour map instead (Bake Filtered Colour Map > Image)"
+
+
+class NoiseNotDerivable(Exception):
+    """The noise's per-pixel mean and spread can't be derived from its
+    settings; the message names the node and the setting."""
+
+
+@dataclasses.dataclass(frozen=True)
+class NoiseModel:
+    """value = offset + Σ c_i (Fac_i − 0.5), Fac_i the normalized Detail-0
+    Noise Texture at Scale·lacunarity^i on the distorted position.
+
+    scale / w: the input's value, None when it is linked (then scale_from /
+    w_from hold the socket linked into it, which the filter takes as a link;
+    vector_from likewise, None for the implicit coordinates)."""
+    node_name: str
+    node_type: str              # NOISE or MUSGRAVE
+    noise_type: str             # 'FBM', 'MULTIFRACTAL', ... (Blender's enum)
+    dimensions: str             # '1D', '2D', '3D', '4D'
+    offset: float
+    coefficients: tuple
+    lacunarity: float
+    distortion: float
+    scale: object = None
+    w: object = None
+    vector_from: object = None
+    scale_from: object = None
+    w_from: object = None
+
+    @property
+    def axes(self):
+        return _AXES[self.dimensions]
+
+    @property
+    def uses_vector(self):
+        return self.dimensions != "1D"
+
+    @property
+    def uses_w(self):
+        return self.dimensions in ("1D", "4D")
+
+    @property
+    def mean_min(self):
+        """Lowest value the noise (and its mean) can take: every octave at −1."""
+        return self.offset - 0.5 * sum(abs(c) for c in self.coefficients)
+
+    @property
+    def mean_max(self):
+        return self.offset + 0.5 * sum(abs(c) for c in self.coefficients)
+
+    @property
+    def total_weight_sq(self):
+        """Σ c_i²: the value's variance is this times one octave's."""
+        return sum(c * c for c in self.coefficients)
+
+    def distortion_offsets(self):
+        """Blender's constant offsets o_k (k < axes), each a tuple of `axes`
+        floats: component k of p moves by distortion·snoise(p + o_k)."""
+        return tuple(random_offset(float(k), self.axes) for k in range(self.axes))
+
+
+# ---- Blender's hash (Cycles util/hash.h, blenlib BLI_hash.hh) -------------
+
+def _rot(x, k):
+    return ((x << k) | (x >> (32 - k))) & 0xFFFFFFFF
+
+
+def _final(a, b, c):
+    """Jenkins lookup3 final(a, b, c); returns c."""
+    m = 0xFFFFFFFF
+    c ^= b
+    c = (c - _rot(b, 14)) & m
+    a ^= c
+    a = (a - _rot(c, 11)) & m
+    b ^= a
+    b = (b - _rot(a, 25)) & m
+    c ^= b
+    c = (c - _rot(b, 16)) & m
+    a ^= c
+    a = (a - _rot(c, 4)) & m
+    b ^= a
+    b = (b - _rot(a, 14)) & m
+    c ^= b
+    c = (c - _rot(b, 24)) & m
+    return c
+
+
+def hash_uint(kx):
+    a = b = c = (0xDEADBEEF + (1 << 2) + 13) & 0xFFFFFFFF
+    a = (a + kx) & 0xFFFFFFFF
+    return _final(a, b, c)
+
+
+def hash_uint2(kx, ky):
+    a = b = c = (0xDEADBEEF + (2 << 2) + 13) & 0xFFFFFFFF
+    b = (b + ky) & 0xFFFFFFFF
+    a = (a + kx) & 0xFFFFFFFF
+    return _final(a, b, c)
+
+
+def _float_bits(x):
+    return struct.unpack("<I", struct.pack("<f", x))[0]
+
+
+def _f32(x):
+    return struct.unpack("<f", struct.pack("<f", x))[0]
+
+
+def _offset_component(hashed):
+    """100 + 100·uint_to_float_incl(hashed) in float arithmetic:
+    (float)n · (1 / (float)0xFFFFFFFF), and 1/(float)0xFFFFFFFF is 2^-32."""
+    unit = _f32(_f32(float(hashed)) * 2.0 ** -32)
+    return _f32(100.0 + _f32(unit * 100.0))
+
+
+def random_offset(seed, axes):
+    """random_float_offset(seed) (1D: a 1-tuple) or random_float{2,3,4}_offset
+    (noisetex.h): component k = 100 + 100·hash_float2_to_float(seed, k)."""
+    if axes == 1:
+        return (_offset_component(hash_uint(_float_bits(seed))),)
+    return tuple(_offset_component(hash_uint2(_float_bits(seed), _float_bits(float(k)))) for k in range(axes))
+
+
+# ---- reading the node ------------------------------------------------------
+
+def _label(node):
+    return f"{_LABELS.get(node.bl_idname, node.bl_idname)} '{node.name}'"
+
+
+def _link(socket):
+    """The socket feeding `socket` through a live link, or None."""
+    for link in socket.links:
+        if not getattr(link, "is_muted", False):
+            return link.from_socket
+    return None
+
+
+def _type_name(node, prop, value):
+    try:
+        return node.bl_rna.properties[prop].enum_items[value].name
+    except (KeyError, AttributeError):
+        return value
+
+
+def _unused_inputs(noise_type):
+    """Inputs a fractal type ignores (so a link into them is harmless)."""
+    return {"FBM": {"Offset", "Gain"}, "MULTIFRACTAL": {"Offset", "Gain"},
+            "HETERO_TERRAIN": {"Gain"}}.get(noise_type, set())
+
+
+def _check_links(node, noise_type):
+    linked = [s.name for s in node.inputs
+              if s.enabled and s.identifier not in LINKABLE and s.identifier not in _unused_inputs(noise_type)
+              and _link(s) is not None]
+    if linked:
+        names = " and ".join(linked)
+        verb = "is" if len(linked) == 1 else "are"
+        raise NoiseNotDerivable(
+            f"{_label(node)}: {names} {verb} driven by a link, so the noise's octaves (and its per-pixel "
+            f"mean and spread) change from point to point; set {'it' if len(linked) == 1 else 'them'} to a "
+            f"number (only Vector, Scale and W may be linked), or {_FROM_IMAGE}")
+
+
+def _check_texture_mapping(node):
+    """Cycles applies a texture node's hidden Texture Mapping (set in the
+    Properties editor) before the noise; the filter does not."""
+    m = getattr(node, "texture_mapping", None)
+    if m is None:
+        return
+    identity = (tuple(m.translation) == (0.0, 0.0, 0.0) and tuple(m.rotation) == (0.0, 0.0, 0.0) and
+                tuple(m.scale) == (1.0, 1.0, 1.0) and not m.use_min and not m.use_max and
+                (m.mapping_x, m.mapping_y, m.mapping_z) == ("X", "Y", "Z"))
+    if not identity:
+        raise NoiseNotDerivable(
+            f"{_label(node)}: its Texture Mapping (Properties editor > Texture > Mapping) is not the identity "
+            "and the filter does not apply it; reset it and use a Mapping node on the Vector instead")
+
+
+def _input(node, identifier):
+    """The input socket with this identifier, or None. Looking an input up by
+    name fails in 4.x for a socket the node's settings make unavailable (W of
+    3D noise, Offset of fBm), so search the identifiers."""
+    for socket in node.inputs:
+        if socket.identifier == identifier:
+            return socket
+    return None
+
+
+def _value(node, identifier, default=0.0):
+    socket = _input(node, identifier)
+    return float(socket.default_value) if socket is not None else default
+
+
+def _nonlinear(node, type_label, detail, hint):
+    return NoiseNotDerivable(
+        f"{_label(node)}: type {type_label} is nonlinear in its octaves at Detail {detail:g}, so its per-pixel "
+        f"mean and spread can't be derived; use fBm{hint}, or {_FROM_IMAGE}")
+
+
+def read_noise(node, output=None):
+    """The NoiseModel of a Noise or Musgrave Texture whose `output` (a socket
+    or identifier; None: Fac) drives the ramp. Raises NoiseNotDerivable with
+    a message naming the node and the setting when it can't be derived."""
+    if node.bl_idname not in _LABELS:
+        raise NoiseNotDerivable(f"'{node.name}' is a {node.bl_label} node, not a Noise or Musgrave Texture: its "
+                                f"per-pixel mean and spread can't be derived; {_FROM_IMAGE}")
+    identifier = getattr(output, "identifier", output)
+    if identifier not in (None, "Fac"):
+        raise NoiseNotDerivable(
+            f"{_label(node)}: the ramp is driven by its {identifier} output (three noises at other offsets "
+            "mixed by the colour conversion), which the filter does not model; drive the ramp with Fac")
+    _check_texture_mapping(node)
+    if node.bl_idname == MUSGRAVE:
+        noise_type, dimensions = node.musgrave_type, node.musgrave_dimensions
+    else:
+        noise_type, dimensions = getattr(node, "noise_type", "FBM"), node.noise_dimensions
+    type_label = _type_name(node, "musgrave_type" if node.bl_idname == MUSGRAVE else "noise_type", noise_type)
+    if noise_type == "RIDGED_MULTIFRACTAL":  # (offset − |s|)² at any Detail
+        raise NoiseNotDerivable(
+            f"{_label(node)}: type {type_label} is nonlinear in its octaves (it squares |noise|), so its "
+            f"per-pixel mean and spread can't be derived; use fBm, or {_FROM_IMAGE}")
+    _check_links(node, noise_type)
+    if node.bl_idname == MUSGRAVE:
+        offset, coefficients, lacunarity = _musgrave_terms(node, noise_type, type_label)
+        distortion = 0.0
+    else:
+        offset, coefficients, lacunarity = _noise_terms(node, noise_type, type_label)
+        distortion = _value(node, "Distortion")
+    scale_from, w_from = _link(_input(node, "Scale")), _link(_input(node, "W"))
+    return NoiseModel(
+        node_name=node.name, node_type=node.bl_idname, noise_type=noise_type, dimensions=dimensions,
+        offset=float(offset), coefficients=tuple(float(c) for c in coefficients), lacunarity=float(lacunarity),
+        distortion=distortion, scale=None if scale_from else _value(node, "Scale"),
+        w=None if w_from else _value(node, "W"), vector_from=_link(_input(node, "Vector")),
+        scale_from=scale_from, w_from=w_from)
+
+
+def _noise_terms(node, noise_type, type_label):
+    """(offset, c_i, lacunarity) of a Noise Texture (noise_fbm and friends)."""
+    detail = min(max(_value(node, "Detail"), 0.0), 15.0)
+    roughness = _value(node, "Roughness")
+    legacy = bpy.app.version < (4, 0, 0)
+    roughness = min(max(roughness, 0.0), 1.0) if legacy else max(roughness, 0.0)
+    lacunarity = _value(node, "Lacunarity", 2.0)
+    if noise_type != "FBM":
+        return _one_octave_noise(node, noise_type, type_label, detail, roughness) + (lacunarity,)
+    if getattr(node, "normalize", True):
+        return 0.5, noise_statistics.octave_weights(detail, roughness), lacunarity
+    n = int(math.floor(detail))
+    f = detail - n
+    coefficients = [2.0 * roughness ** i for i in range(n + 1)]
+    if f > 0.0:
+        coefficients.append(2.0 * f * roughness ** (n + 1))
+    return 0.0, coefficients, lacunarity
+
+
+def _one_octave_noise(node, noise_type, type_label, detail, roughness):
+    """4.1+ multifractal, hybrid multifractal and hetero terrain multiply
+    octaves together (fractal_noise.h); with Detail 0 or Roughness 0 only the
+    first octave is left: 1 + s_0, and Offset + s_0 for the other two."""
+    if detail > 0.0 and roughness > 0.0:
+        raise _nonlinear(node, type_label, detail, " (or Detail 0 / Roughness 0 for a single octave)")
+    base = 1.0 if noise_type == "MULTIFRACTAL" else _value(node, "Offset")
+    return base, [2.0]
+
+
+def _musgrave_terms(node, noise_type, type_label):
+    """(offset, c_i, lacunarity) of a 3.x Musgrave Texture (musgrave.h)."""
+    octaves = min(max(_value(node, "Detail"), 0.0), 15.0)
+    h = max(_value(node, "Dimension"), 1e-5)
+    lacunarity = max(_value(node, "Lacunarity"), 1e-5)
+    n = int(math.floor(octaves))
+    f = octaves - n
+    if noise_type != "FBM":
+        return _one_octave_musgrave(node, noise_type, type_label, octaves, n, f) + (lacunarity,)
+    coefficients = [2.0 * lacunarity ** (-h * i) for i in range(n)]
+    if f > 0.0 or not coefficients:  # Detail 0: the value is 0 (one zero coefficient)
+        coefficients.append(2.0 * f * lacunarity ** (-h * n))
+    return 0.0, coefficients, lacunarity
+
+
+def _one_octave_musgrave(node, noise_type, type_label, octaves, n, f):
+    """3.x Musgrave types whose value is linear in the first octave s_0
+    (musgrave.h; loops run i < ⌊Detail⌋, the fraction f adds a partial one):
+    multifractal 1 + f·s_0 (Detail < 1) or 1 + s_0 (Detail 1); hybrid
+    f·(s_0 + Offset) (Detail < 1) or s_0 + Offset (Detail 1); hetero terrain
+    Offset + s_0 (Detail 0 or 1)."""
+    base = _value(node, "Offset")
+    if noise_type == "MULTIFRACTAL" and (n == 0 or (n == 1 and f == 0.0)):
+        return 1.0, [2.0 * (f if n == 0 else 1.0)]
+    if noise_type == "HYBRID_MULTIFRACTAL" and (n == 0 or (n == 1 and f == 0.0)):
+        weight = f if n == 0 else 1.0
+        return weight * base, [2.0 * weight]
+    if noise_type == "HETERO_TERRAIN" and n <= 1 and f == 0.0:
+        return base, [2.0]
+    raise _nonlinear(node, type_label, octaves, " (or Detail 1 or less for a single octave)")
+
+
+# ---- rebuilding the octaves with nodes -------------------------------------
+
+Coordinates = namedtuple("Coordinates", "vector w")
+Coordinates.__doc__ = """Where the octaves are evaluated, in the noise's own units
+(before Scale): Vector and W, each a socket or a constant."""
+
+
+def configure_octave_node(noise_node, model):
+    """Set a Noise Texture node up as one octave of `model`: its dimensions,
+    fBm, normalized, Detail 0, Distortion 0, the noise's lacunarity (unused at
+    Detail 0) and its W value where W is a constant. The caller links
+    Vector (and W) and sets Scale = model scale · lacunarity^i."""
+    noise_node.noise_dimensions = model.dimensions
+    if hasattr(noise_node, "noise_type"):
+        noise_node.noise_type = "FBM"
+    if hasattr(noise_node, "normalize"):
+        noise_node.normalize = True
+    settings = {"Detail": 0.0, "Distortion": 0.0, "Lacunarity": model.lacunarity}
+    if model.w is not None:
+        settings["W"] = model.w
+    for identifier, value in settings.items():
+        socket = _input(noise_node, identifier)
+        if socket is not None:  # 3.4 has no Lacunarity
+            socket.default_value = value
+    return noise_node
+
+
+def octave_fac(b, coordinates, scale, model):
+    """A Detail-0 octave of `model` at `coordinates` with Scale `scale`
+    (socket or number): its Fac output. `b` is node_groups._Builder."""
+    node = configure_octave_node(b._place(b.nodes.new(NOISE)), model)
+    if model.uses_vector:
+        b.connect(coordinates.vector, _input(node, "Vector"))
+    if model.uses_w:
+        b.connect(coordinates.w, _input(node, "W"))
+    b.connect(scale, _input(node, "Scale"))
+    return node.outputs["Fac"]
+
+
+def distorted_vector(b, vector, scale, model, w=None):
+    """Coordinates(Vector', W') such that a Detail-0 Noise Texture there with
+    Scale·lacunarity^i is octave i of the distorted noise:
+    Vector' = Vector + d·(s_0, s_1, s_2)/Scale (W' = W + d·s_3/Scale in 4D,
+    W + d·s_0/Scale in 1D), s_k = snoise(p + o_k), p = Vector·Scale. Each
+    s_k is 2·Fac − 1 of a normalized Detail-0 Noise Texture at Scale 1 on
+    p + o_k, the same float operations as Blender's (noisetex.h). `vector`,
+    `scale` and `w` (None: the model's W) are sockets or constants."""
+    w = model.w if w is None else w
+    if model.distortion == 0.0:
+        return Coordinates(vector, w)
+    p = b.vscale(vector, scale) if model.uses_vector else None
+    pw = b.math("MULTIPLY", w, scale) if model.uses_w else None
+    signed = []
+    for o in model.distortion_offsets():
+        shifted = Coordinates(b.vmath("ADD", p, _padded(o[:3])) if p is not None else None,
+                              b.math("ADD", pw, o[-1]) if pw is not None else None)
+        signed.append(b.math("MULTIPLY_ADD", octave_fac(b, shifted, 1.0, model), 2.0, -1.0))
+    step = b.math("DIVIDE", model.distortion, scale)
+    vector_out, w_out = vector, w
+    if model.uses_vector:
+        moves = (signed[:3] + [0.0, 0.0])[:3]  # 2D: no move along z
+        vector_out = b.vmath("ADD", vector, b.vscale(b.combine(*moves), step))
+    if model.uses_w:
+        w_out = b.math("MULTIPLY_ADD", signed[-1], step, w)
+    return Coordinates(vector_out, w_out)
+
+
+def _padded(values):
+    return tuple(values) + (0.0,) * (3 - len(values))
