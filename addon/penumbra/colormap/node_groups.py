@@ -314,31 +314,42 @@ def _centre_offset(b, gin, gout, geometry, forward, right, up, ju, jv):
     b.links.new(b.vscale(offset, b.math("MULTIPLY", in_front, near)), gout.inputs["Centre Offset"])
 
 
-def noise_filter_group(octave_image, table, weights, lacunarity, filter_stddev_px):
+def noise_filter_group(octave_image, table, model, filter_stddev_px):
     """Vector, Scale, Units per World, Minor, Major, Axis U, Axis V, Centre
-    Offset -> Mean, Sigma, the octave-wise filter of a normalized fBm Noise
-    Texture (docs/colormap.md, "Octave filter"). The noise is rebuilt from its
-    octaves (Noise Textures at Detail 0, Scale·lacunarity^i, weights w_i:
-    exactly Blender's Fac). Each octave is evaluated at 16 taps around the
-    centre of the sample's pixel, P + Centre Offset + κ(n·m + t·M): n = ±1
-    along the footprint ellipse's minor axis m, t = MAJOR_TAPS along its major
-    axis M (κ the pixel filter's standard deviation in pixels; offsets taken
-    to the noise's coordinates by the object's inverse transform and Units per
-    World), so their average A_i estimates the octave's pixel mean and is the
-    same for every sample of the pixel. Over a footprint of standard
-    deviations s·(1, e) (s = κ·Minor·Scale·Units per World, e = Major/Minor)
-    octave i keeps the fraction q_i = q(s·lacunarity^i, e) of its variance
-    inside the pixel (measured table); the taps estimate the pixel mean with
-    an error of about e_i = q_i²/N of the octave's variance (N = 16 taps:
-    fourth order for smooth octaves, the variance of N uncorrelated taps for
-    fine ones). Mean = 0.5 + Σ w_i g_i (A_i − 0.5), g_i = (1 − q_i)/(1 − q_i +
-    e_i) (least-squares shrinkage). Sigma² = the taps' spread of
-    Σ w_i g_i (Fac_i − 0.5) (the local within-pixel variance of what the mean
-    keeps) + V₀ Σ w_i² (max(q_i − g_i² q_i (1 − q_i/N), 0) + (1 − q_i) e_i /
-    (1 − q_i + e_i)): the within-pixel variance the spread misses on average,
-    plus the remaining uncertainty of the mean."""
-    key = "/".join(f"{w:.6g}" for w in weights) + f" l{lacunarity:g} k{filter_stddev_px:.4g} taps16"
-    name = f"{NOISE_FILTER} ({key})"
+    Offset, Samples, W -> Mean, Sigma: the octave-wise filter of the noise
+    `model` (noise_model.NoiseModel: offset + Σ c_i (Fac_i − 0.5), Fac_i a
+    normalized Noise Texture at Detail 0 and Scale·lacunarity^i on the
+    distorted position; normalized fBm: offset 0.5, c_i = w_i). See
+    docs/colormap.md, "Octave filter" and "Sample-count-aware filter".
+
+    Each sample filters its share of the pixel filter: with N = Samples,
+    a Gaussian of standard deviation τ = κ/√N (κ the pixel filter's) centred
+    at c + β(x − c), β = √(1 − 1/N), c the pixel's centre and x the sample
+    (P + (1 − β)·Centre Offset). Averaged over the sample positions these
+    kernels have the pixel filter's variance β²κ² + τ² = κ² at every N, so the
+    expected pixel is filtered as the renderer would filter it; at N = 1 every
+    sample of a pixel gets the pixel-centred estimate, and as N grows the
+    kernel shrinks onto the sample and the result tends to the plain ramp.
+
+    The 16 taps sit at P + (1 − β)·Centre Offset + τ(n·m + t·M): n = ±1
+    along the footprint ellipse's minor axis m, t = MAJOR_TAPS along its
+    major axis M (offsets taken to the noise's coordinates by the object's
+    inverse transform and Units per World), then moved by the noise's
+    Distortion; their average A_i estimates octave i's mean over the kernel.
+    Over a kernel of standard deviations s·(1, e) (s = τ·Minor·Scale·Units
+    per World, e = Major/Minor) octave i keeps the fraction
+    q_i = q(s·lacunarity^i, e) of its variance inside (measured table); the
+    taps estimate the mean with an error of about e_i = q_i²/16 of the
+    octave's variance. Mean = offset + Σ c_i g_i (A_i − 0.5),
+    g_i = (1 − q_i)/(1 − q_i + e_i) (least-squares shrinkage). Sigma² = the
+    taps' spread of Σ c_i g_i (Fac_i − 0.5) + V₀ Σ c_i² (max(q_i − g_i² q_i
+    (1 − q_i/16), 0) + (1 − q_i) e_i/(1 − q_i + e_i)): the variance the
+    spread misses on average, plus the remaining uncertainty of the mean."""
+    from . import noise_model
+    coefficients, offset, lacunarity = model.coefficients, model.offset, model.lacunarity
+    key = (f"{model.dimensions} " + "/".join(f"{c:.6g}" for c in coefficients) +
+           f" o{offset:g} l{lacunarity:g} d{model.distortion:g} w{model.w} k{filter_stddev_px:.4g}")
+    name = f"{NOISE_FILTER} ({key} spp)"
     group = bpy.data.node_groups.get(name)
     if group is not None:
         return group
@@ -348,53 +359,77 @@ def noise_filter_group(octave_image, table, weights, lacunarity, filter_stddev_p
                                          ("Minor", "NodeSocketFloat", 0.0), ("Major", "NodeSocketFloat", 0.0),
                                          ("Axis U", "NodeSocketVector", (0.0, 0.0, 0.0)),
                                          ("Axis V", "NodeSocketVector", (0.0, 0.0, 0.0)),
-                                         ("Centre Offset", "NodeSocketVector", (0.0, 0.0, 0.0))],
+                                         ("Centre Offset", "NodeSocketVector", (0.0, 0.0, 0.0)),
+                                         ("Samples", "NodeSocketFloat", 1.0),
+                                         ("W", "NodeSocketFloat", 0.0)],
                                   [("Mean", "NodeSocketFloat"), ("Sigma", "NodeSocketFloat")])
-    group["penumbra_octave_weights"] = list(weights)
+    group["penumbra_octave_coefficients"] = list(coefficients)
+    group["penumbra_octave_offset"] = offset
     b = _Builder(group)
-    log2_s, v = _footprint_table_coordinates(b, gin, table, filter_stddev_px)
-    taps = _pixel_taps(b, gin, filter_stddev_px)
-    tap_floor = 1.0 / len(taps)   # variance of the tap average of uncorrelated taps
-    mean = 0.5
-    variance = 0.0
-    tap_sums = [0.0] * len(taps)   # Σ_i w_i g_i (Fac_i(tap) − 0.5) per tap
-    for i, w in enumerate(weights):
-        values = _octave_taps(b, taps, b.math("MULTIPLY", gin.outputs["Scale"], lacunarity ** i))
-        total = values[0]
+    share, centre_weight = _sample_share(b, gin.outputs["Samples"])
+    log2_s, v = _footprint_table_coordinates(b, gin, table, filter_stddev_px, share)
+    taps = _pixel_taps(b, gin, filter_stddev_px, share, centre_weight)
+    taps = [noise_model.distorted_vector(b, tap, gin.outputs["Scale"], model, gin.outputs["W"]) for tap in taps]
+    mean, variance, tap_sums = offset, 0.0, [0.0] * len(taps)   # tap_sums: Σ_i c_i g_i (Fac_i(tap) − 0.5)
+    for i, c in enumerate(coefficients):
+        scale = b.math("MULTIPLY", gin.outputs["Scale"], lacunarity ** i)
+        values = [noise_model.octave_fac(b, tap, scale, model) for tap in taps]
+        q = _octave_fraction(b, octave_image, table, log2_s, v, i * math.log2(lacunarity))
+        g, term = _octave_shrinkage(b, q, len(taps))
+        average = values[0]
         for value in values[1:]:
-            total = b.math("ADD", total, value)
-        average = b.math("MULTIPLY", total, 1.0 / len(taps))
-        logs = table["log2_footprint"]
-        u = b.texel(b.math("MULTIPLY_ADD", log2_s, 1.0 / (logs[-1] - logs[0]),
-                           (i * math.log2(lacunarity) - logs[0]) / (logs[-1] - logs[0])), len(logs))
-        q, _, _ = b.separate(b.image(octave_image, b.combine(u, v)).outputs["Color"])
-        kept = b.math("SUBTRACT", 1.0, q)
-        tap_error = b.math("MULTIPLY", b.math("MULTIPLY", q, q), tap_floor)
-        g = b.math("DIVIDE", kept, b.math("MAXIMUM", b.math("ADD", kept, tap_error), 1e-9))
-        wg = b.math("MULTIPLY", g, w)
-        mean = b.math("MULTIPLY_ADD", b.math("SUBTRACT", average, 0.5), wg, mean)
+            average = b.math("ADD", average, value)
+        cg = b.math("MULTIPLY", g, c)
+        mean = b.math("MULTIPLY_ADD", b.math("SUBTRACT", b.math("MULTIPLY", average, 1.0 / len(taps)), 0.5), cg,
+                      mean)
         for t, value in enumerate(values):
-            tap_sums[t] = b.math("MULTIPLY_ADD", b.math("SUBTRACT", value, 0.5), wg, tap_sums[t])
-        # Not seen by the taps' spread: q − g² q (1 − q/N) (the expected spread
-        # of N taps), plus the uncertainty of the mean (1 − q) e/(1 − q + e).
-        captured = b.math("MULTIPLY", b.math("MULTIPLY", g, g),
-                          b.math("MULTIPLY", q, b.math("MULTIPLY_ADD", q, -1.0 / len(taps), 1.0)))
-        term = b.math("ADD", b.math("MAXIMUM", b.math("SUBTRACT", q, captured), 0.0),
-                      b.math("MULTIPLY", g, tap_error))
-        variance = b.math("MULTIPLY_ADD", term, table["total_var"] * w * w, variance)
+            tap_sums[t] = b.math("MULTIPLY_ADD", b.math("SUBTRACT", value, 0.5), cg, tap_sums[t])
+        variance = b.math("MULTIPLY_ADD", term, table["total_var"] * c * c, variance)
     variance = b.math("ADD", variance, _tap_spread(b, tap_sums))
     b.connect(mean, gout.inputs["Mean"])
     b.links.new(b.math("SQRT", b.math("MAXIMUM", variance, 0.0)), gout.inputs["Sigma"])
     return group
 
 
-def _footprint_table_coordinates(b, gin, table, filter_stddev_px):
-    """log2 s (the footprint's minor standard deviation in noise units) and
-    the octave table's v coordinate of the footprint's elongation."""
+def _sample_share(b, samples):
+    """1/√N (the kernel's share of the pixel filter's standard deviation) and
+    1 − β = 1 − √(1 − 1/N) (how far the kernel sits towards the pixel's
+    centre), N = Samples clamped to ≥ 1."""
+    n = b.math("MAXIMUM", samples, 1.0)
+    inverse = b.math("DIVIDE", 1.0, n)
+    centre_weight = b.math("SUBTRACT", 1.0, b.math("SQRT", b.math("SUBTRACT", 1.0, inverse)))
+    return b.math("SQRT", inverse), centre_weight
+
+
+def _octave_fraction(b, octave_image, table, log2_s, v, log2_octave):
+    """q: the fraction of one octave's variance inside the kernel (table)."""
+    logs = table["log2_footprint"]
+    u = b.texel(b.math("MULTIPLY_ADD", log2_s, 1.0 / (logs[-1] - logs[0]),
+                       (log2_octave - logs[0]) / (logs[-1] - logs[0])), len(logs))
+    q, _, _ = b.separate(b.image(octave_image, b.combine(u, v)).outputs["Color"])
+    return q
+
+
+def _octave_shrinkage(b, q, tap_count):
+    """g = (1 − q)/(1 − q + e), e = q²/taps, and the variance term the taps'
+    spread does not see: q − g² q (1 − q/taps) (the expected spread of the
+    taps) plus the uncertainty of the shrunk mean (1 − q) e/(1 − q + e)."""
+    kept = b.math("SUBTRACT", 1.0, q)
+    tap_error = b.math("MULTIPLY", b.math("MULTIPLY", q, q), 1.0 / tap_count)
+    g = b.math("DIVIDE", kept, b.math("MAXIMUM", b.math("ADD", kept, tap_error), 1e-9))
+    captured = b.math("MULTIPLY", b.math("MULTIPLY", g, g),
+                      b.math("MULTIPLY", q, b.math("MULTIPLY_ADD", q, -1.0 / tap_count, 1.0)))
+    term = b.math("ADD", b.math("MAXIMUM", b.math("SUBTRACT", q, captured), 0.0), b.math("MULTIPLY", g, tap_error))
+    return g, term
+
+
+def _footprint_table_coordinates(b, gin, table, filter_stddev_px, share):
+    """log2 s (the kernel's minor standard deviation in noise units) and the
+    octave table's v coordinate of the footprint's elongation."""
     elongations = table["log2_elongation"]
     minor = b.math("MAXIMUM", gin.outputs["Minor"], 1e-12)
     s = b.math("MULTIPLY", b.math("MULTIPLY", minor, gin.outputs["Scale"]),
-               b.math("MULTIPLY", gin.outputs["Units per World"], filter_stddev_px))
+               b.math("MULTIPLY", gin.outputs["Units per World"], b.math("MULTIPLY", share, filter_stddev_px)))
     log2_s = b.math("LOGARITHM", b.math("MAXIMUM", s, 1e-12), 2.0)
     log2_e = b.math("LOGARITHM", b.math("MAXIMUM", b.math("DIVIDE", gin.outputs["Major"], minor), 1.0), 2.0)
     v = b.texel(b.math("MINIMUM", b.math("MULTIPLY", log2_e, 1.0 / elongations[-1]), 1.0), len(elongations))
@@ -433,42 +468,26 @@ def _footprint_principal_axes(b, axis_u, axis_v):
     return major_axis, minor_axis
 
 
-def _pixel_taps(b, gin, filter_stddev_px):
-    """The 16 tap positions in the noise's coordinates, P + Centre Offset +
-    κ(n·m + t·M): world offsets taken there by the object's inverse
-    transform (directions) and Units per World (lengths)."""
+def _pixel_taps(b, gin, filter_stddev_px, share, centre_weight):
+    """The 16 tap positions in the noise's coordinates, P + (1 − β)·Centre
+    Offset + τ(n·m + t·M), τ = share·κ: world offsets taken there by the
+    object's inverse transform (directions) and Units per World (lengths)."""
     axis_u, axis_v = gin.outputs["Axis U"], gin.outputs["Axis V"]
     ref = b.vmath("ADD", axis_u, axis_v)
     k = b.math("DIVIDE", b.math("MULTIPLY", b.vmath("LENGTH", ref), gin.outputs["Units per World"]),
                b.math("MAXIMUM", b.vmath("LENGTH", _world_to_object(b, ref)), 1e-30))
     major_axis, minor_axis = _footprint_principal_axes(b, axis_u, axis_v)
-    km = b.vscale(_world_to_object(b, major_axis), b.math("MULTIPLY", k, filter_stddev_px))
-    kn = b.vscale(_world_to_object(b, minor_axis), b.math("MULTIPLY", k, filter_stddev_px))
-    base = b.vmath("ADD", gin.outputs["Vector"], b.vscale(_world_to_object(b, gin.outputs["Centre Offset"]), k))
+    tau = b.math("MULTIPLY", b.math("MULTIPLY", k, filter_stddev_px), share)
+    km = b.vscale(_world_to_object(b, major_axis), tau)
+    kn = b.vscale(_world_to_object(b, minor_axis), tau)
+    base = b.vmath("ADD", gin.outputs["Vector"], b.vscale(_world_to_object(b, gin.outputs["Centre Offset"]),
+                                                          b.math("MULTIPLY", k, centre_weight)))
     taps = []
     for side in (-1.0, 1.0):
         row = b.vmath("ADD", base, b.vscale(kn, side))
         for t in MAJOR_TAPS:
             taps.append(b.vmath("ADD", row, b.vscale(km, t)))
     return taps
-
-
-def _octave_taps(b, taps, scale):
-    """One octave (a Noise Texture at Detail 0) at every tap: its Fac outputs."""
-    values = []
-    for tap in taps:
-        noise = b._place(b.nodes.new("ShaderNodeTexNoise"))
-        noise.noise_dimensions = "3D"
-        if hasattr(noise, "normalize"):
-            noise.normalize = True
-        if hasattr(noise, "noise_type"):
-            noise.noise_type = "FBM"
-        noise.inputs["Detail"].default_value = 0.0
-        noise.inputs["Distortion"].default_value = 0.0
-        b.links.new(tap, noise.inputs["Vector"])
-        b.connect(scale, noise.inputs["Scale"])
-        values.append(noise.outputs["Fac"])
-    return values
 
 
 def _tap_spread(b, tap_sums):

@@ -79,7 +79,13 @@ def pixel_filter_stddev(scene):
     Cycles (scene/film.cpp, filter_table) builds Blackman-Harris over twice
     `filter_width` (so its support is ±width: σ = 0.2770·width, 0.4155 px at
     the default 1.5), the Gaussian over 3·width (exp(−8 v²/width²):
-    σ = width/4) and the box over width (σ = width/√12)."""
+    σ = width/4) and the box over width (σ = width/√12). EEVEE Legacy
+    (eevee_temporal_sampling.c) jitters its samples by the inverse CDF of
+    Blackman-Harris scaled to ±render.filter_size pixels (the table spans
+    ±2, times filter_size, applied as an NDC shift of ofs/size, half that in
+    pixels): σ = 0.2770·filter_size, its first sample at the pixel centre."""
+    if scene.render.engine in ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT"):
+        return 0.27701 * scene.render.filter_size
     cycles = getattr(scene, "cycles", None)
     width = getattr(cycles, "filter_width", 1.5) if cycles else 1.5
     kind = getattr(cycles, "pixel_filter_type", "BLACKMAN_HARRIS") if cycles else "BLACKMAN_HARRIS"

@@ -15,7 +15,7 @@ import threading
 import bpy
 import numpy as np
 
-from . import node_groups, noise_statistics, ramp as ramp_io
+from . import node_groups, noise_model, noise_statistics, ramp as ramp_io, sample_count
 from .. import color, native, world
 from ..compat import socket_is, uses_nodes
 from ..errors import CORE_ERRORS, describe
@@ -101,8 +101,9 @@ def _ramp_fingerprint(node):
             if not socket.is_linked:
                 return None
             return socket.links[0].from_node.name, socket.links[0].from_socket.identifier
-        noise_settings = (noise.name, noise.noise_dimensions, getattr(noise, "noise_type", None),
-                          getattr(noise, "normalize", None),
+        noise_settings = (noise.name, noise.bl_idname, getattr(noise, "noise_dimensions", None),
+                          getattr(noise, "musgrave_dimensions", None), getattr(noise, "noise_type", None),
+                          getattr(noise, "musgrave_type", None), getattr(noise, "normalize", None),
                           tuple((i.identifier, linked(i), getattr(i, "default_value", None) if not i.is_linked and
                                  isinstance(getattr(i, "default_value", None), float) else None)
                                 for i in noise.inputs if i.enabled))
@@ -192,34 +193,27 @@ class BakePlan:
             self._plan_noise(context)
 
     def _plan_noise(self, context):
-        noise = self.noise
-        detail = noise.inputs["Detail"].default_value
-        roughness = noise.inputs["Roughness"].default_value
-        for name in ("Detail", "Roughness"):
-            if noise.inputs[name].is_linked:
-                self.warnings.append(f"the noise's {name} is driven by a link; its value "
-                                     f"{noise.inputs[name].default_value:g} was used for the statistics")
-        if noise.noise_dimensions in ("1D", "4D"):
-            self.warnings.append(f"{noise.noise_dimensions} noise: statistics were measured on 3D noise")
-        if getattr(noise, "noise_type", "FBM") != "FBM" or not getattr(noise, "normalize", True):
-            self.warnings.append("statistics were measured for normalized fBM noise")
-        self.noise_lacunarity = noise.inputs["Lacunarity"].default_value if "Lacunarity" in noise.inputs else 2.0
-        if not self.noise_lacunarity > 1.0:
-            raise BakeError(f"the noise's Lacunarity is {self.noise_lacunarity:g}: the filter needs a value > 1")
-        if "Distortion" in noise.inputs and noise.inputs["Distortion"].default_value != 0.0:
-            self.warnings.append("statistics were measured with Distortion 0")
-        self.noise_detail, self.noise_roughness = detail, roughness
-        self.octave_weights = noise_statistics.octave_weights(detail, roughness)
-        # The widest filter needed is the noise's spread over a huge footprint.
-        self.sigma_max = 1.05 * noise_statistics.filtered_sigma_max(detail, roughness)
-        self.mean_min, self.mean_max = 0.0, 1.0  # the noise's Fac (and its mean) lies in [0, 1]
+        try:
+            self.noise_model = noise_model.read_noise(self.noise, ramp_io.driving_socket(self.node))
+        except noise_model.NoiseNotDerivable as error:
+            raise BakeError(f"{error} (nothing was changed)") from None
+        model = self.noise_model
+        if not model.lacunarity > 1.0:
+            raise BakeError(f"the noise's Lacunarity is {model.lacunarity:g}: the filter needs a value > 1")
+        if model.dimensions == "1D":
+            self.warnings.append("1D noise follows W, which has no footprint: the filter sees its octaves but "
+                                 "cannot spread its taps along W")
+        # The widest filter needed is the noise's spread over a huge footprint;
+        # the mean axis covers every value the noise can take.
+        self.sigma_max = 1.05 * math.sqrt(noise_statistics.octave_table()["total_var"] * model.total_weight_sq)
+        self.mean_min, self.mean_max = model.mean_min, model.mean_max
         self.orthographic = context.scene.camera is not None and context.scene.camera.type == "CAMERA" and \
             context.scene.camera.data.type == "ORTHO"
         self.pixel_size, warning = _pixel_size(context.scene)
         self.raster_offset = _raster_offset(context.scene)
         if warning:
             self.warnings.append(warning)
-        self.coordinate_scale, warning = _coordinate_scale(noise, context.object)
+        self.coordinate_scale, warning = _coordinate_scale(self.noise, context.object)
         if warning:
             self.warnings.append(warning)
         self.filter_stddev = noise_statistics.pixel_filter_stddev(context.scene)
@@ -341,8 +335,9 @@ class BakePlan:
     def _wire_noise(self, tree, group_node, source):
         octave_image, table = noise_statistics.octave_image(self.folder)
         noise_filter = tree.nodes.new("ShaderNodeGroup")
-        noise_filter.node_tree = node_groups.noise_filter_group(octave_image, table, self.octave_weights,
-                                                                self.noise_lacunarity, self.filter_stddev)
+        noise_filter.node_tree = node_groups.noise_filter_group(octave_image, table, self.noise_model,
+                                                                self.filter_stddev)
+        sample_count.drive_samples(noise_filter, self.scene)
         noise_filter.name = noise_filter.label = "Penumbra Noise Filter"
         noise_filter.location = (group_node.location.x - 220, group_node.location.y + 40)
         footprint = tree.nodes.new("ShaderNodeGroup")
@@ -365,11 +360,12 @@ class BakePlan:
         tree.links.new(footprint.outputs["Major"], noise_filter.inputs["Major"])
         for name in ("Axis U", "Axis V", "Centre Offset"):
             tree.links.new(footprint.outputs[name], noise_filter.inputs[name])
-        scale_input = self.noise.inputs["Scale"]
-        if scale_input.is_linked:
-            tree.links.new(scale_input.links[0].from_socket, noise_filter.inputs["Scale"])
-        else:
-            noise_filter.inputs["Scale"].default_value = scale_input.default_value
+        model = self.noise_model
+        for name, source, value in (("Scale", model.scale_from, model.scale), ("W", model.w_from, model.w)):
+            if source is not None:
+                tree.links.new(source, noise_filter.inputs[name])
+            elif value is not None:
+                noise_filter.inputs[name].default_value = value
         noise_filter.inputs["Units per World"].default_value = self.coordinate_scale
         tree.links.new(noise_filter.outputs["Mean"], group_node.inputs["Mean"])
         tree.links.new(noise_filter.outputs["Sigma"], group_node.inputs["Sigma"])
@@ -401,6 +397,7 @@ class _Rollback:
     def restore(self):
         if self.tree is not None:
             for node in [n for n in self.tree.nodes if n.name not in self.nodes]:
+                sample_count.remove_driver(node)
                 self.tree.nodes.remove(node)
             for from_socket, to_socket in self.links:
                 if not any(l.from_socket == from_socket for l in to_socket.links):
@@ -569,6 +566,7 @@ class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):
                             if source.name.startswith("Penumbra"):
                                 doomed.add(source.name)
         for name in doomed:
+            sample_count.remove_driver(tree.nodes[name])
             tree.nodes.remove(tree.nodes[name])
         ramp.location = group_node.location
         tree.nodes.remove(group_node)

@@ -2,8 +2,6 @@
 
 import numpy as np
 
-from ..compat import socket_is
-
 
 def ramp_stops(node):
     """(count, 5) float32: position, r, g, b, a of each stop (scene-linear)."""
@@ -27,11 +25,13 @@ def driving_socket(node):
 
 
 def driving_noise(node):
-    """The Noise Texture node whose Fac drives the ramp directly, or None."""
+    """The Noise (or 3.x Musgrave) Texture node that drives the ramp directly,
+    or None. Any of its outputs counts: the bake then says whether that
+    output's statistics can be derived (noise_model.read_noise)."""
     socket = driving_socket(node)
     if socket is None:
         return None
     source = socket.node
-    if source.bl_idname == "ShaderNodeTexNoise" and socket_is(socket, "Fac"):  # named "Factor" in 5.x
+    if source.bl_idname in ("ShaderNodeTexNoise", "ShaderNodeTexMusgrave"):
         return source
     return None

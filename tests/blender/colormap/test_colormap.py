@@ -77,7 +77,7 @@ def test_bake_replaces_a_noise_driven_ramp_and_keeps_the_original(addon, tmp_pat
     footprint = noise_filter.inputs["Minor"].links[0].from_node
     assert noise_filter.inputs["Major"].links[0].from_node == footprint
     assert footprint.inputs["Pixel Size"].default_value > 0
-    weights = noise_filter.node_tree["penumbra_octave_weights"]
+    weights = noise_filter.node_tree["penumbra_octave_coefficients"]
     assert len(weights) == 3 and sum(weights) == pytest.approx(1.0)  # Detail 2 (the default): 3 octaves
     # The lookup image: float EXR, no colour transform, no wrap.
     image_node = next(n for n in group_node.node_tree.nodes if n.bl_idname == "ShaderNodeTexImage")

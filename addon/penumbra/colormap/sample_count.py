@@ -1,0 +1,108 @@
+"""How the Noise Filter learns the render's sample count: a driver on its
+Samples input that reads the scene's render samples of the engine it renders
+with (docs/colormap.md, "Sample-count-aware filter").
+
+A single-property driver needs no Python at render time, so the .blend
+renders the same on a farm without the add-on or with scripts disabled. A
+driver can't choose between engines by itself (render.engine is a string),
+so the bake points it at the scene's engine and a render_init handler
+re-points it when the engine was changed since."""
+
+import bpy
+from bpy.app.handlers import persistent
+
+NOISE_FILTER_PREFIX = "Penumbra Noise Filter"
+
+# Render sample count per engine: the same RNA paths in 3.4, 4.x and 5.x
+# (EEVEE Next in 4.2+ kept taa_render_samples).
+_SAMPLES_PATH = {"CYCLES": "cycles.samples", "BLENDER_EEVEE": "eevee.taa_render_samples",
+                 "BLENDER_EEVEE_NEXT": "eevee.taa_render_samples"}
+
+
+def samples_path(scene):
+    """The scene's render-sample property for its engine, or None (Workbench
+    and other engines: the filter is told one sample)."""
+    return _SAMPLES_PATH.get(scene.render.engine)
+
+
+def render_samples(scene):
+    path = samples_path(scene)
+    return float(scene.path_resolve(path)) if path else 1.0
+
+
+def drive_samples(node, scene):
+    """Adds (or re-points) the driver of `node`'s Samples input."""
+    socket = node.inputs["Samples"]
+    socket.default_value = render_samples(scene)
+    path = samples_path(scene)
+    tree = node.id_data
+    data_path = socket.path_from_id("default_value")
+    curve = tree.animation_data.drivers.find(data_path) if tree.animation_data else None
+    if path is None:
+        if curve is not None:
+            tree.animation_data.drivers.remove(curve)
+        return
+    if curve is None:
+        curve = socket.driver_add("default_value")
+    driver = curve.driver
+    driver.type = "AVERAGE"
+    variable = driver.variables[0] if len(driver.variables) else driver.variables.new()
+    variable.name = "samples"
+    variable.type = "SINGLE_PROP"
+    target = variable.targets[0]
+    target.id_type = "SCENE"
+    target.id = scene
+    target.data_path = path
+
+
+def remove_driver(node):
+    """Removes the Samples driver of a node about to be deleted (a driver
+    whose node is gone would stay in the tree as an error)."""
+    tree = node.id_data
+    if "Samples" not in node.inputs or tree.animation_data is None:
+        return
+    curve = tree.animation_data.drivers.find(node.inputs["Samples"].path_from_id("default_value"))
+    if curve is not None:
+        tree.animation_data.drivers.remove(curve)
+
+
+def noise_filter_nodes(material):
+    tree = material.node_tree
+    if tree is None:
+        return []
+    return [n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.name.startswith(NOISE_FILTER_PREFIX)
+            and "Samples" in n.inputs]
+
+
+def retarget(scene):
+    """Points every Noise Filter's driver at `scene`'s engine; returns how
+    many drivers were changed."""
+    path = samples_path(scene)
+    changed = 0
+    for material in bpy.data.materials:
+        if material.library is not None:
+            continue
+        for node in noise_filter_nodes(material):
+            tree = node.id_data
+            data_path = node.inputs["Samples"].path_from_id("default_value")
+            curve = tree.animation_data.drivers.find(data_path) if tree.animation_data else None
+            current = curve.driver.variables[0].targets[0] if curve and len(curve.driver.variables) else None
+            if current is None or current.data_path != path or current.id != scene:
+                drive_samples(node, scene)
+                changed += 1
+    return changed
+
+
+@persistent
+def on_render_init(scene, *_args):
+    retarget(scene)
+
+
+def register():
+    if on_render_init not in bpy.app.handlers.render_init:
+        bpy.app.handlers.render_init.append(on_render_init)
+
+
+def unregister():
+    if on_render_init in bpy.app.handlers.render_init:
+        bpy.app.handlers.render_init.remove(on_render_init)
