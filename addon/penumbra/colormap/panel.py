@@ -1,11 +1,13 @@
 """The "Filtered Colour Maps" section of the sidebar: the two buttons that
-filter the active ColorRamp and put it back, then the lookup image's size,
-the range it covers and where it is written, in sub-panels."""
+filter the active ColorRamp and put it back, the surface filters (height,
+slope, remove; greyed out until the active material has a baked filtered
+ramp), then the lookup image's size, the range it covers and where it is
+written, in sub-panels."""
 
 import bpy
 
 from .. import sidebar
-from . import operators
+from . import operators, surface_filter
 
 
 def _split(layout):
@@ -26,8 +28,22 @@ class PENUMBRA_PT_colormap(sidebar.ToolSection, bpy.types.Panel):
         column = self.layout.column()
         column.operator(operators.PENUMBRA_OT_bake_colormap_lut.bl_idname, text="Bake Filtered Ramp",
                         icon="NODE_TEXTURE")
-        column.operator(operators.PENUMBRA_OT_restore_color_ramp.bl_idname, text="Restore ColorRamp",
-                        icon="LOOP_BACK")
+        has_ramp, has_filter, covered = surface_filter.panel_state(context)
+        row = column.row()
+        row.enabled = not covered  # a surface filter hides that ramp: remove the filter first
+        row.operator(operators.PENUMBRA_OT_restore_color_ramp.bl_idname, text="Restore ColorRamp",
+                     icon="LOOP_BACK")
+        column = self.layout.column(align=True)
+        column.label(text="Surface Filter")
+        row = column.row(align=True)
+        row.enabled = has_ramp
+        add = surface_filter.PENUMBRA_OT_add_surface_filter.bl_idname
+        row.operator(add, text="Height").kind = "HEIGHT"
+        row.operator(add, text="Slope").kind = "SLOPE"
+        row = column.row(align=True)
+        row.enabled = has_filter
+        row.operator(surface_filter.PENUMBRA_OT_remove_surface_filter.bl_idname, text="Remove Filter",
+                     icon="X")
 
 
 class _SubPanel(sidebar.SidebarPanel):
