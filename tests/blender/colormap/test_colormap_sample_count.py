@@ -1,0 +1,94 @@
+"""The noise filter learns the render's sample count (docs/colormap.md,
+"Sample-count-aware filter"): the driver on its Samples input, re-pointed when
+the engine changes and removed with the filter, and a Cycles render where more
+samples converge instead of blurring twice."""
+
+import bpy
+import numpy as np
+
+from penumbra.colormap import node_groups, sample_count
+
+from test_colormap_noise import _render, _render_scene
+
+
+def _noise_filter(material):
+    nodes = sample_count.noise_filter_nodes(material)
+    assert len(nodes) == 1
+    return nodes[0]
+
+
+def _driver_target(node):
+    tree = node.id_data
+    curve = tree.animation_data.drivers.find(node.inputs["Samples"].path_from_id("default_value"))
+    assert curve is not None and curve.driver.type == "AVERAGE" and not curve.driver.is_simple_expression
+    (variable,) = curve.driver.variables
+    return variable.targets[0]
+
+
+def test_samples_driver_follows_the_render_settings_and_engine(addon, tmp_path):
+    addon.penumbra.colormap.output_folder = str(tmp_path)
+    material, ramp, emission, camera = _render_scene(addon, 70.0)
+    addon.cycles.samples = 24
+    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
+    node = _noise_filter(material)
+    target = _driver_target(node)
+    assert (target.id, target.data_path) == (addon, "cycles.samples")
+    assert node.inputs["Samples"].default_value == 24
+    # Another engine: the handler re-points the driver when a render starts.
+    addon.render.engine = "BLENDER_EEVEE_NEXT" if bpy.app.version >= (4, 2, 0) and bpy.app.version < (5, 0, 0) \
+        else "BLENDER_EEVEE"
+    addon.eevee.taa_render_samples = 9
+    assert sample_count.retarget(addon) == 1
+    assert _driver_target(node).data_path == "eevee.taa_render_samples"
+    assert sample_count.retarget(addon) == 0          # already right: nothing changes
+    addon.render.engine = "CYCLES"
+    addon.render.resolution_x, addon.render.resolution_y = 8, 6
+    _render(addon, str(tmp_path / "tiny.exr"), 2, 0)  # render_init re-points it back
+    assert _driver_target(node).data_path == "cycles.samples"
+
+
+def test_restore_removes_the_samples_driver(addon, tmp_path):
+    addon.penumbra.colormap.output_folder = str(tmp_path)
+    material, ramp, emission, camera = _render_scene(addon, 70.0)
+    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
+    tree = material.node_tree
+    assert len(tree.animation_data.drivers) == 1
+    tree.nodes.active = tree.nodes[node_groups.FILTERED_RAMP]
+    assert bpy.ops.penumbra.restore_color_ramp() == {"FINISHED"}
+    assert len(tree.animation_data.drivers) == 0
+
+
+def test_more_samples_converge_where_the_pixel_centred_filter_does_not(addon, tmp_path):
+    """48×32 Cycles renders of the receding plane against the plain ramp at
+    1024 spp: with the sample count driven, the filtered material at 64 spp
+    is no worse than the plain ramp at 64 spp and at 4 spp well below the
+    plain ramp's error; held at one sample (the pixel-centred filter of a
+    1-spp render), it stays far from the reference at 64 spp."""
+    addon.penumbra.colormap.output_folder = str(tmp_path)
+    material, ramp, emission, camera = _render_scene(addon, 84.0)
+    addon.cycles.samples = 1   # baked at one sample: only the driver can tell it 4 or 64
+    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
+    tree = material.node_tree
+    group = tree.nodes[node_groups.FILTERED_RAMP]
+    ramp.mute = False
+    tree.links.new(ramp.outputs["Color"], emission.inputs["Color"])
+    reference = _render(addon, str(tmp_path / "reference.exr"), 1024, 7)
+    ground = reference.sum(axis=2) > 0
+
+    def rmse(image):
+        return float(np.sqrt(((image - reference)[ground] ** 2).mean()))
+    plain = {spp: rmse(_render(addon, str(tmp_path / f"plain{spp}.exr"), spp, 1)) for spp in (4, 64)}
+    tree.links.new(group.outputs["Color"], emission.inputs["Color"])
+    filtered = {spp: rmse(_render(addon, str(tmp_path / f"filtered{spp}.exr"), spp, 1)) for spp in (4, 64)}
+    assert filtered[4] < 0.8 * plain[4], (filtered, plain)
+    assert filtered[64] < 1.1 * plain[64], (filtered, plain)
+    # The same material told it renders one sample: the old, fixed filter.
+    node = _noise_filter(material)
+    sample_count.unregister()
+    try:
+        sample_count.remove_driver(node)
+        node.inputs["Samples"].default_value = 1.0
+        fixed = rmse(_render(addon, str(tmp_path / "fixed64.exr"), 64, 1))
+    finally:
+        sample_count.register()
+    assert fixed > 2.0 * filtered[64], (fixed, filtered)
