@@ -31,6 +31,10 @@ HEIGHT_RAMP = "Penumbra Height Filtered Ramp"
 SLOPE_RAMP = "Penumbra Slope Filtered Ramp"
 MICROSURFACE_IMAGE = "Penumbra Microsurface Statistics"
 MICROSURFACE_TABLE_SIZE = 256
+# A pixel ray that misses the tangent plane (beyond the horizon) is taken to
+# meet it at this many times the sample's own distance: the footprint is
+# bounded there instead of infinite.
+HORIZON_REACH = 20.0
 # Tap positions along the footprint's major axis, in filter standard
 # deviations: the Gaussian's quantiles at (k + 1/2)/8 scaled to unit variance
 # (equal weights); two taps (±1) along the minor axis: 16 taps in all.
@@ -241,21 +245,40 @@ def _camera_frame(b, geometry):
 
 
 def _footprint_jacobian(b, gin, geometry, to_point, forward, right, up):
-    """J_u, J_v: the world-space steps of the surface point per pixel."""
+    """J_u, J_v: the world-space steps of the surface point per pixel.
+    Orthographic: the projection is affine and the derivative is exact.
+    Perspective: the secant across the pixel, X(d + ½p·R) − X(d − ½p·R)
+    (same with U), X(q) where the ray q from the camera meets the tangent
+    plane: exact for a plane, where the derivative at the centre is too small
+    for pixels that reach the horizon (their far edge projects much further).
+    A ray that misses the plane (beyond the horizon) is bounded: the far point
+    lies at most HORIZON_REACH times the sample's distance."""
     camera = b.nodes.new("ShaderNodeCameraData")
     cos_beta = b.math("MAXIMUM", b.vmath("DOT_PRODUCT", to_point, forward), 1e-6)
-    ray = b.vscale(to_point, b.math("DIVIDE", 1.0, cos_beta))
+    ray = b.vscale(to_point, b.math("DIVIDE", 1.0, cos_beta))       # unit component along F
     normal = geometry.outputs["Normal"]
     ray_n = b.vmath("DOT_PRODUCT", ray, normal)
     inv_ray_n = b.math("DIVIDE", ray_n, b.math("MAXIMUM", b.math("MULTIPLY", ray_n, ray_n), 1e-12))
     ortho = gin.outputs["Orthographic"]
-    width = b.math("MULTIPLY", gin.outputs["Pixel Size"],
-                   b.math("ADD", b.math("MULTIPLY", camera.outputs["View Z Depth"], b.math("SUBTRACT", 1.0, ortho)),
-                          ortho))
+    depth = camera.outputs["View Z Depth"]
+    half = b.math("MULTIPLY", gin.outputs["Pixel Size"], 0.5)
+
+    def derivative(axis):
+        k = b.math("MULTIPLY", b.vmath("DOT_PRODUCT", axis, normal), inv_ray_n)
+        return b.vscale(b.vmath("SUBTRACT", axis, b.vscale(ray, k)), gin.outputs["Pixel Size"])
+
+    def point(axis, sign):
+        """X(ray + sign·½p·axis) − camera, over the sample's depth: the ray
+        scaled to the plane, t = (ray·N)/(q·N) (q·N bounded away from 0)."""
+        q = b.vmath("ADD", ray, b.vscale(axis, b.math("MULTIPLY", half, sign)))
+        ratio = b.math("MULTIPLY", b.vmath("DOT_PRODUCT", q, normal), inv_ray_n)      # (q·N)/(ray·N)
+        return b.vscale(q, b.math("DIVIDE", 1.0, b.math("MAXIMUM", ratio, 1.0 / HORIZON_REACH)))
 
     def column(axis):
-        k = b.math("MULTIPLY", b.vmath("DOT_PRODUCT", axis, normal), inv_ray_n)
-        return b.vscale(b.vmath("SUBTRACT", axis, b.vscale(ray, k)), width)
+        secant = b.vmath("SUBTRACT", point(axis, 1.0), point(axis, -1.0))
+        mixed = b.vmath("ADD", b.vscale(secant, b.math("MULTIPLY", depth, b.math("SUBTRACT", 1.0, ortho))),
+                        b.vscale(derivative(axis), ortho))
+        return mixed
 
     return column(right), column(up)
 
