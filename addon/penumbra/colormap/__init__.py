@@ -5,14 +5,15 @@ sidebar section is panel.py (registered by ../panels.py)."""
 
 if "bpy" in locals():
     import importlib
-    for _name in ("interface", "settings", "ramp", "noise_statistics", "node_groups", "sample_count", "operators",
-                  "surface_filter", "panel"):
+    for _name in ("interface", "settings", "ramp", "noise_statistics", "noise_model", "node_groups", "sample_count",
+                  "operators", "surface_filter", "panel"):
         if _name in locals():
             importlib.reload(locals()[_name])
 
 import bpy  # noqa: E402
 
-from . import interface, settings, ramp, noise_statistics, node_groups, sample_count, operators, panel  # noqa: E402,F401
+from . import interface, settings, ramp, noise_statistics, noise_model, node_groups  # noqa: E402,F401
+from . import sample_count, operators, panel  # noqa: E402,F401
 from . import surface_filter  # noqa: E402
 
 # Registered before the scene's `penumbra` group, which points at SceneSettings.

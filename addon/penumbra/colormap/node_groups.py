@@ -22,7 +22,7 @@ import tempfile
 import bpy
 import numpy as np
 
-from . import interface
+from . import interface, noise_model
 
 FILTERED_RAMP = "Penumbra Filtered Ramp"
 FOOTPRINT = "Penumbra Pixel Footprint"
@@ -368,7 +368,6 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px):
     taps' spread of Σ c_i g_i (Fac_i − 0.5) + V₀ Σ c_i² (max(q_i − g_i² q_i
     (1 − q_i/16), 0) + (1 − q_i) e_i/(1 − q_i + e_i)): the variance the
     spread misses on average, plus the remaining uncertainty of the mean."""
-    from . import noise_model
     coefficients, offset, lacunarity = model.coefficients, model.offset, model.lacunarity
     key = (f"{model.dimensions} " + "/".join(f"{c:.6g}" for c in coefficients) +
            f" o{offset:g} l{lacunarity:g} d{model.distortion:g} w{model.w} k{filter_stddev_px:.4g}")
