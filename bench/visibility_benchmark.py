@@ -26,6 +26,7 @@ import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
 from penumbra.visibility import bake, runtime, scene_data  # noqa: E402
 import visibility_character  # noqa: E402
+from svg_plot import svg_plot  # noqa: E402
 
 QUICK = "--quick" in sys.argv
 DOCS = os.path.join(ROOT, "docs")
@@ -164,56 +165,6 @@ def runtime_costs(detail, repeats=10):
     median["frame_change_without_penumbra"] = float(np.median(plain))
     median["vertices"] = len(obj.data.vertices)
     return median
-
-
-def svg_plot(results, path):
-    """Two panels: unseen-pose AO error vs rays (lobes 2), and per-lobe errors (256 rays)."""
-    width, height, pad = 760, 320, 50
-    parts = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" font-family="sans-serif" font-size="11">',
-             '<rect width="100%" height="100%" fill="white"/>']
-
-    def panel(x0, title, xs, series, xlabel, logx):
-        w, h = 320, 220
-        y0 = 40
-        allv = [v for _, vals, _ in series for v in vals]
-        ymax = max(allv) * 1.15 if allv else 1
-        def X(v):
-            if logx:
-                return x0 + pad + w * (np.log2(v) - np.log2(xs[0])) / max(np.log2(xs[-1]) - np.log2(xs[0]), 1e-9)
-            return x0 + pad + w * (v - xs[0]) / max(xs[-1] - xs[0], 1e-9)
-        def Y(v):
-            return y0 + h - h * v / ymax
-        parts.append(f'<text x="{x0 + pad}" y="{y0 - 15}" font-size="13">{title}</text>')
-        parts.append(f'<line x1="{x0 + pad}" y1="{y0 + h}" x2="{x0 + pad + w}" y2="{y0 + h}" stroke="black"/>')
-        parts.append(f'<line x1="{x0 + pad}" y1="{y0}" x2="{x0 + pad}" y2="{y0 + h}" stroke="black"/>')
-        for v in xs:
-            parts.append(f'<text x="{X(v):.1f}" y="{y0 + h + 14}" text-anchor="middle">{v}</text>')
-        for k in range(5):
-            v = ymax * k / 4
-            parts.append(f'<text x="{x0 + pad - 4}" y="{Y(v) + 4:.1f}" text-anchor="end">{v:.3f}</text>')
-        parts.append(f'<text x="{x0 + pad + w / 2}" y="{y0 + h + 30}" text-anchor="middle">{xlabel}</text>')
-        for i, (name, vals, colour) in enumerate(series):
-            pts = " ".join(f"{X(x):.1f},{Y(v):.1f}" for x, v in zip(xs, vals))
-            parts.append(f'<polyline points="{pts}" fill="none" stroke="{colour}" stroke-width="2"/>')
-            for x, v in zip(xs, vals):
-                parts.append(f'<circle cx="{X(x):.1f}" cy="{Y(v):.1f}" r="3" fill="{colour}"/>')
-            parts.append(f'<text x="{x0 + pad + w - 5}" y="{y0 + 14 + 14 * i}" text-anchor="end" fill="{colour}">{name}</text>')
-
-    rays_rows = [r for r in results["sweep"] if r["lobes"] == 2]
-    xs = [r["rays"] for r in rays_rows]
-    panel(0, "Lobes 2: error vs rays (SH RMS)", xs,
-          [("ZH fit", [r["zh_fit_sh_rms"] for r in rays_rows], "#2a7"),
-           ("model, training", [r["training_sh_rms"] for r in rays_rows], "#27c"),
-           ("model, unseen poses", [r["unseen_sh_rms"] for r in rays_rows], "#c33")], "rays per vertex", True)
-    lobe_rows = [r for r in results["sweep"] if r["rays"] == results["lobe_rays"]]
-    panel(380, f"Rays {results['lobe_rays']}: error vs lobes (SH RMS)", [r["lobes"] for r in lobe_rows],
-          [("ZH fit", [r["zh_fit_sh_rms"] for r in lobe_rows], "#2a7"),
-           ("model, training", [r["training_sh_rms"] for r in lobe_rows], "#27c"),
-           ("model, unseen poses", [r["unseen_sh_rms"] for r in lobe_rows], "#c33")], "lobes", False)
-    parts.append("</svg>")
-    with open(path + ".tmp", "w") as f:
-        f.write("\n".join(parts))
-    os.replace(path + ".tmp", path)
 
 
 def main():
