@@ -1,13 +1,17 @@
 """The World's lighting as Blender renders it: the one reader of the World's
 node tree, used by every tool (the visibility shading's SH lighting, the
-light rig's source map). Nothing here projects or samples; it says what the
-World is and hands over its pixels.
+light rig's source map). It says what the World is and hands over its
+pixels; where no single rotated image says it, environment_radiance
+evaluates the lit World on a latlong grid, as Blender's Environment Texture
+looks its images up. It projects and samples nothing else.
 
 The wiring it follows, as Blender evaluates it:
-  active World Output (for the scene's render engine) → Surface ← Background
-  (Strength: its value or a Value node; Color: its value, an RGB node, or an
-  Environment Texture) ← Vector ← Mapping / Vector Rotate nodes ← Texture
-  Coordinate (Generated or Object) or nothing (the view direction).
+  active World Output (for the scene's render engine) → Surface ← Mix Shader
+  and Add Shader nodes (Fac: its value, a Value node, or a Light Path's Is
+  Camera Ray) ← Background nodes (Strength: its value or a Value node;
+  Color: its value, an RGB node, or an Environment Texture) ← Vector ←
+  Mapping / Vector Rotate nodes ← Texture Coordinate (Generated or Object)
+  or nothing (the view direction).
 On the way it passes through reroutes, muted nodes (their internal links),
 muted links (as if absent), and node groups (a group node's output is its
 active Group Output's input inside; a Group Input's output is the group
@@ -15,20 +19,38 @@ node's input outside), recursively.
 
 Conventions. Directions are Blender world directions (+Z up, from the scene
 towards the light); the equirectangular convention is core/common/latlong.hpp.
-Cycles looks the Environment Texture up at m = normalize(v), v the Vector
-input (intern/cycles/kernel/svm/image.h); a Mapping node gives
-v = R·(s·x) + t (POINT), R·(s·x) (VECTOR), normalize(R·(x/s)) (NORMAL) or
-Rᵀ·(x − t)/s (TEXTURE), R = Rz·Ry·Rx from the Euler XYZ Rotation
-(intern/cycles/kernel/svm/mapping_util.h, euler_to_transform in
-intern/cycles/util/transform.h; mathutils' Euler XYZ gives the same matrix).
-A chain of such nodes gives m = L·d for the view direction d, so what the map
-shows at m is seen at d = Lᵀ·m: `world_from_map` = Lᵀ, the matrix the light
-rig applies to its lights and the SH lighting rotates by
-(sh.rotate(c, world_from_map): L(d) = E(world_from_mapᵀ·d)).
+For the World, Cycles' shading position is the view direction d itself, a
+unit vector (shader_setup_from_background in kernel/geom/shader_data.h sets
+P = D), and that is what Generated and Object (no object set) give.
+Cycles looks the Environment Texture up at m = safe_normalize(v), v the
+Vector input (svm_node_tex_environment, kernel/svm/image.h); a Mapping node
+gives v = R·(s∘x) + t (POINT), R·(s∘x) (VECTOR), normalize(R·(x/s)) (NORMAL)
+or (Rᵀ·(x − t))/s (TEXTURE), x/s = 0 where s = 0 (safe_divide), R = Rz·Ry·Rx
+from the Euler XYZ Rotation (svm_mapping in kernel/svm/mapping_util.h,
+euler_to_transform in util/transform.h; mathutils' Euler XYZ gives the same
+matrix), and a Vector Rotate v = Q·(x − c) + c (kernel/svm/vector_rotate.h).
+A chain of them is a DirectionLookup d ↦ m, in general not a rotation: a
+Location makes m depend on where d points relative to it, a non-uniform
+Scale bends directions towards an axis, a negative one mirrors. When it is a
+rotation, m = L·d and what the map shows at m is seen at d = Lᵀ·m:
+`world_from_map` = Lᵀ, the matrix the light rig applies to its lights and
+the SH lighting rotates by (sh.rotate(c, world_from_map): L(d) =
+E(world_from_mapᵀ·d)).
+
+The lit World is Σ weight · strength · colour(lookup(d)) over the
+Backgrounds that reach the output (`terms`): a Mix Shader weighs its first
+Shader by 1 − Fac and its second by Fac, Fac clamped to [0, 1]
+(svm_node_mix_closure, kernel/svm/closure.h), an Add Shader both by 1. Every
+reader gets the one-Background fields (kind, colour, strength, image,
+world_from_map); a reader that takes the whole sum (read(...,
+weighted_sum=True): the light rig) gets `terms`, and the others get a
+problem for every Background beyond one and every lookup that is not a
+rotation.
 
 What cannot be represented (a Sky Texture, a Strength from a Math node, a
-Mapping location, a non-uniform scale...) is not silently replaced: it goes to
-`problems`, each saying what stands in and how to fix it."""
+Location driven by other nodes, a Fac from Is Diffuse Ray...) is not
+silently replaced: it goes to `problems`, each naming the node and input,
+what stands in, and how to fix it."""
 
 import os
 
@@ -47,15 +69,21 @@ class WorldError(ValueError):
 class WorldLighting:
     """What the World's node tree says, without pixels.
 
-    kind            'black', 'uniform' or 'environment'
+    kind            'black', 'uniform' or 'environment' (an image lights it)
     colour          (3,) scene-linear Background colour (uniform, or the stand-in)
-    strength        Background strength, not applied to anything here
+    strength        Background strength times its weight in the mix, not
+                    applied to anything here
     node, image     the Environment Texture node and its image ('environment')
     projection      the node's projection ('EQUIRECTANGULAR' or 'MIRROR_BALL')
     world_from_map  (3, 3) rotation: what the map shows at m lights from world_from_map·m
+    terms           every Background that lights the scene, as BackgroundTerm;
+                    the fields above are the one term (the first image's
+                    when there are several; a problem unless weighted_sum)
     source          what was read ("environment 'sky.exr'", "uniform Background colour"...)
+    notes           what a user may not expect but is read right (a branch
+                    shown to the camera only)
     problems        what could not be read, each with its stand-in and its fix
-    note            source and problems in one line, for a panel or a report"""
+    note            source, notes and problems in one line, for a panel or a report"""
 
     def __init__(self):
         self.kind = "black"
@@ -65,7 +93,9 @@ class WorldLighting:
         self.image = None
         self.projection = "EQUIRECTANGULAR"
         self.world_from_map = np.eye(3)
+        self.terms = []
         self.source = ""
+        self.notes = []
         self.problems = []
 
     @property
@@ -75,7 +105,93 @@ class WorldLighting:
 
     @property
     def note(self):
-        return "; ".join([self.source] + self.problems)
+        return "; ".join([self.source] + self.notes + self.problems)
+
+    @property
+    def rotated_image(self):
+        """The one term when the World is a single image seen through a
+        rotation (a light rig reads it straight from its file and turns its
+        lights), else None."""
+        if len(self.terms) == 1 and self.terms[0].kind == "environment" and self.terms[0].lookup.rotation is not None:
+            return self.terms[0]
+        return None
+
+
+class BackgroundTerm:
+    """One Background node's share of the World's light:
+    weight · strength · colour, the colour a constant or an Environment
+    Texture's image looked up at lookup(d).
+
+    background      the Background node
+    weight          the product of the Mix Shader shares on its way to the output
+    strength        its Strength
+    kind            'uniform' or 'environment'
+    colour          (3,) scene-linear colour (uniform, or the stand-in)
+    node, image     the Environment Texture and its image ('environment')
+    projection      'EQUIRECTANGULAR' or 'MIRROR_BALL'
+    interpolation   the texture's interpolation ('Closest' is looked up as
+                    such, the others bilinearly)
+    lookup          DirectionLookup: view direction → where the image is looked up
+    source          what it is, for the note"""
+
+    def __init__(self, background, weight):
+        self.background = background
+        self.weight = weight
+        self.strength = 1.0
+        self.kind = "uniform"
+        self.colour = np.zeros(3)
+        self.node = None
+        self.image = None
+        self.projection = "EQUIRECTANGULAR"
+        self.interpolation = "Linear"
+        self.lookup = DirectionLookup()
+        self.source = "uniform Background colour"
+
+
+def _safe_normalize(v):
+    """v / |v| along the last axis, 0 where v = 0 (Cycles' safe_normalize)."""
+    length = np.linalg.norm(v, axis=-1, keepdims=True)
+    return np.divide(v, length, out=np.zeros_like(v), where=length > 0.0)
+
+
+class DirectionLookup:
+    """Where an Environment Texture is looked up for the view direction d, as
+    Cycles evaluates its Vector: steps x ↦ A·x + b (Mapping, Vector Rotate),
+    some followed by a normalization (a NORMAL Mapping), applied to d in
+    order, then m = safe_normalize(x), the texture's own.
+
+    steps          [(A, b, normalize)] in the order they act on d
+    rotation_part  the product of the steps' rotations: m = rotation_part·d
+                   when nothing warps
+    warps          what makes it more than a rotation, one message per node
+                   input (a problem for readers that take only a rotation)"""
+
+    def __init__(self):
+        self.steps = []
+        self.rotation_part = np.eye(3)
+        self.warps = []
+
+    @property
+    def rotation(self):
+        """R with m = R·d for every view direction d, or None when the lookup warps."""
+        return None if self.warps else self.rotation_part
+
+    def add_before(self, step, rotation, warps):
+        """A node met walking back from the texture: it acts on the vector
+        before the nodes met already."""
+        self.steps.insert(0, step)
+        self.rotation_part = self.rotation_part @ rotation
+        self.warps.extend(warps)
+
+    def __call__(self, directions):
+        """(..., 3) lookup directions m for view directions d: unit, or 0
+        where the Vector comes out 0."""
+        x = np.asarray(directions, dtype=np.float64)
+        for a, b, normalize in self.steps:
+            x = x @ a.T + b
+            if normalize:
+                x = _safe_normalize(x)
+        return _safe_normalize(x)
 
 
 def engine_target(engine):
@@ -155,13 +271,16 @@ def feed(socket, path=()):
     raise WorldError("the World's node tree loops through its node groups: break the loop")
 
 
-def read_scene(scene):
+def read_scene(scene, weighted_sum=False):
     """read() of the scene's World for the scene's render engine."""
-    return read(scene.world, scene.render.engine)
+    return read(scene.world, scene.render.engine, weighted_sum)
 
 
-def read(world, engine=None):
-    """The WorldLighting of a World as `engine` (scene.render.engine) renders it."""
+def read(world, engine=None, weighted_sum=False):
+    """The WorldLighting of a World as `engine` (scene.render.engine) renders
+    it. weighted_sum: the caller takes every term with any lookup (the light
+    rig); otherwise only one Background seen through a rotation is taken,
+    and more is a problem."""
     r = WorldLighting()
     if world is None:
         r.source = "no World: black"
@@ -175,18 +294,14 @@ def read(world, engine=None):
         r.problems.append(f"the World '{world.name}' has no World Output node{_for_engine(engine)}: "
                           "add one and connect a Background node to its Surface")
         return _unconnected_environments(world, r)
-    background = feed(output.inputs["Surface"])
-    if background.node is None:
+    surface = feed(output.inputs["Surface"])
+    if surface.node is None:
         r.source = "nothing feeds the World Output: black"
         r.problems.append(f"nothing (or only a muted node) is connected to the Surface of the World Output "
                           f"'{output.name}': connect a Background node to it")
         return _unconnected_environments(world, r)
-    if background.node.bl_idname != "ShaderNodeBackground":
-        r.source = "World output not fed by a Background node: black"
-        r.problems.append(f"the World output is fed by a {background.node.bl_label} node (unsupported): "
-                          "feed it a Background node")
-        return _unconnected_environments(world, r)
-    _read_background(background.node, background.path, r)
+    _read_shader(surface, 1.0, "the World output", r)
+    _take_terms(r, weighted_sum)
     return _unconnected_environments(world, r)
 
 
@@ -195,19 +310,82 @@ def _for_engine(engine):
     return f" for {'Cycles' if target == 'CYCLES' else 'EEVEE'} or All" if target else ""
 
 
-def _read_background(background, path, r):
-    """Strength and Color of the Background node at the output."""
-    r.strength = _float_input(background.inputs["Strength"], path, r, "Strength")
-    colour = feed(background.inputs["Color"], path)
-    r.kind, r.source = "uniform", "uniform Background colour"
-    if colour.node is None:
-        r.colour = np.array(colour.socket.default_value[:3], dtype=np.float64)
+# Shader inputs of the nodes that combine Backgrounds.
+_SHADER_INPUTS = {"ShaderNodeMixShader": (1, 2), "ShaderNodeAddShader": (0, 1)}
+
+
+def _read_shader(source, weight, where, r):
+    """Adds the Backgrounds behind a shader Feed to r.terms, each with its
+    weight: a Mix Shader passes 1 − Fac to its first Shader and Fac to its
+    second, an Add Shader 1 to both. A branch of weight 0 adds no light and
+    is not read (an unsupported node there changes nothing); an unconnected
+    Shader input adds nothing either, as in Blender."""
+    node = source.node
+    if node is None:
         return
-    r.colour = np.array(background.inputs["Color"].default_value[:3], dtype=np.float64)
+    if node.bl_idname == "ShaderNodeBackground":
+        r.terms.append(_read_background(node, source.path, weight, r))
+        return
+    if node.bl_idname not in _SHADER_INPUTS:
+        r.problems.append(f"{where} is fed by a {node.bl_label} node '{node.name}' (unsupported: it adds no light "
+                          "here); feed it a Background node, or Mix or Add Shaders of Background nodes")
+        return
+    shares = (1.0, 1.0)
+    if node.bl_idname == "ShaderNodeMixShader":
+        fac = _mix_factor(node, source.path, r)
+        shares = (1.0 - fac, fac)
+    for index, share in zip(_SHADER_INPUTS[node.bl_idname], shares):
+        if weight * share > 0.0:
+            _read_shader(feed(node.inputs[index], source.path), weight * share,
+                         f"Shader input {index} of '{node.name}'", r)
+
+
+def _mix_factor(mix, path, r):
+    """A Mix Shader's Fac for the light that reaches surfaces, in [0, 1].
+
+    A Light Path's Is Camera Ray is 0 for every ray that lights something:
+    Cycles evaluates the World for a light sample with no camera visibility
+    (PATH_RAY_EMISSION, kernel/light/sample.h, kernel/integrator/shade_light.h)
+    and for a bounce that escapes with the bounce's own (diffuse, glossy,
+    transmission; kernel/integrator/shade_background.h); only camera rays
+    that miss everything see 1. So the lights follow the first Shader and
+    the second is what the camera shows (noted, not a problem). Is Diffuse
+    Ray or Is Glossy Ray is 1 for a bounce but 0 for a light sample of the
+    same direction, so what they light depends on Cycles' sampling: a
+    problem, as is any other Fac driver."""
+    socket = mix.inputs["Fac"]
+    source = feed(socket, path)
+    if source.node is None:
+        fac = float(source.socket.default_value)
+    elif source.node.bl_idname == "ShaderNodeValue":
+        fac = float(source.output.default_value)
+    elif source.node.bl_idname == "ShaderNodeLightPath" and source.output.identifier == "Is Camera Ray":
+        r.notes.append(f"'{mix.name}' shows its second Shader to the camera only (Fac: Is Camera Ray of "
+                       f"'{source.node.name}'); the light is its first Shader's")
+        return 0.0
+    else:
+        what = (f"the {source.output.name} output of the Light Path node '{source.node.name}'"
+                if source.node.bl_idname == "ShaderNodeLightPath" else f"a {source.node.bl_label} node "
+                f"'{source.node.name}'")
+        fac = float(socket.default_value)
+        r.problems.append(f"the Fac of the Mix Shader '{mix.name}' comes from {what} (unsupported: its own value "
+                          f"{fac:g} is used); use a value, a Value node or Light Path's Is Camera Ray")
+    return min(max(fac, 0.0), 1.0)
+
+
+def _read_background(background, path, weight, r):
+    """The BackgroundTerm of a Background node: its Strength and Color."""
+    term = BackgroundTerm(background, weight)
+    term.strength = _float_input(background.inputs["Strength"], path, r, f"the Strength of '{background.name}'")
+    colour = feed(background.inputs["Color"], path)
+    if colour.node is None:
+        term.colour = np.array(colour.socket.default_value[:3], dtype=np.float64)
+        return term
+    term.colour = np.array(background.inputs["Color"].default_value[:3], dtype=np.float64)
     source = colour.node
     if source.bl_idname == "ShaderNodeRGB":
-        r.colour = np.array(colour.output.default_value[:3], dtype=np.float64)
-        r.source = f"uniform colour of '{source.name}'"
+        term.colour = np.array(colour.output.default_value[:3], dtype=np.float64)
+        term.source = f"uniform colour of '{source.name}'"
     elif source.bl_idname == "ShaderNodeTexSky":
         r.problems.append("Sky Texture is not supported: the Background colour stands in")
     elif source.bl_idname != "ShaderNodeTexEnvironment":
@@ -217,12 +395,40 @@ def _read_background(background, path, r):
         r.problems.append(f"the Environment Texture '{source.name}' has no image: open an image in it "
                           "(the Background colour stands in)")
     else:
-        r.kind, r.node, r.image, r.projection = "environment", source, source.image, source.projection
-        r.source = f"environment '{source.image.name}'"
-        lookup = _vector_lookup(source.inputs["Vector"], colour.path, r)
-        r.world_from_map = lookup.T
-        if not np.allclose(lookup, np.eye(3), atol=1e-9):
-            r.source += " (rotated)"
+        term.kind, term.node, term.image, term.projection = "environment", source, source.image, source.projection
+        term.interpolation = source.interpolation
+        term.source = f"environment '{source.image.name}'"
+        term.lookup = _vector_lookup(source.inputs["Vector"], colour.path, r)
+        if term.lookup.rotation is None:
+            term.source += " (remapped)"
+        elif not np.allclose(term.lookup.rotation, np.eye(3), atol=1e-9):
+            term.source += " (rotated)"
+    return term
+
+
+def _take_terms(r, weighted_sum):
+    """The one-Background fields from r.terms: the one term, or the first
+    image's (a problem unless the reader takes the sum); a lookup that is not
+    a rotation is a problem unless the reader takes the sum, and its
+    rotation stands in."""
+    terms = r.terms
+    if not terms:
+        r.source = "no Background reaches the World Output: black"
+        return
+    images = [t for t in terms if t.kind == "environment"]
+    main = images[0] if images else terms[0]
+    r.kind, r.colour, r.node, r.image, r.projection = main.kind, main.colour, main.node, main.image, main.projection
+    r.strength = main.weight * main.strength
+    r.world_from_map = main.lookup.rotation_part.T
+    shares = [t.source if t.weight == 1.0 else f"{t.weight:g} × {t.source}" for t in terms]
+    r.source = " + ".join(shares)
+    if weighted_sum:
+        return
+    r.problems.extend(main.lookup.warps)
+    if len(terms) > 1:
+        names = ", ".join(f"'{t.background.name}'" for t in terms)
+        r.problems.append(f"the World adds {len(terms)} Backgrounds ({names}), which is unsupported here: "
+                          f"'{main.background.name}' stands in at its share; use one Background")
 
 
 def _float_input(socket, path, r, what):
@@ -239,14 +445,14 @@ def _float_input(socket, path, r, what):
 
 def _unconnected_environments(world, r):
     """When the World is not lit by an image, names the Environment Textures
-    with an image that are in its tree but not wired to the active output:
-    the likely reason."""
+    with an image that are in its tree but do not light it (not wired to the
+    active output, or only on a branch the camera sees): the likely reason."""
     if r.kind == "environment" or world.node_tree is None:
         return r
     for node in _environment_nodes(world.node_tree, set()):
         r.problems.append(f"the Environment Texture '{node.name}' (image '{node.image.name}') is not connected "
-                          "to the Background at the active World Output: connect its Color to the Background's "
-                          "Color")
+                          "to a Background that lights the scene from the active World Output: connect its Color to "
+                          "that Background's Color")
     return r
 
 
@@ -289,55 +495,72 @@ def _vector_input(socket, path, r, what):
                     dtype=np.float64)
 
 
-def _mapping_lookup(node, path, r):
-    """A Mapping node as m = A·x (up to length, which the lookup drops)."""
-    rotation = _euler_xyz(_vector_input(node.inputs["Rotation"], path, r, f"the Rotation of '{node.name}'"))
+def _mapping_step(node, path, r):
+    """A Mapping node as a lookup step: ((A, b, normalize), its rotation,
+    what makes it more than a rotation) (svm_mapping, kernel/svm/mapping_util.h).
+    VECTOR and NORMAL ignore the Location, as Cycles does."""
+    name = node.name
+    rotation = _euler_xyz(_vector_input(node.inputs["Rotation"], path, r, f"the Rotation of '{name}'"))
+    scale = _vector_input(node.inputs["Scale"], path, r, f"the Scale of '{name}'")
+    location, warps = np.zeros(3), []
     if node.vector_type in {"POINT", "TEXTURE"}:
-        location = _vector_input(node.inputs["Location"], path, r, f"the Location of '{node.name}'")
+        location = _vector_input(node.inputs["Location"], path, r, f"the Location of '{name}'")
         if np.any(np.abs(location) > 1e-9):
-            r.problems.append(f"the Mapping node '{node.name}' has a Location, which moves the lookup off the "
-                              "sphere (unsupported: ignored); set it to 0")
-    scale = _vector_input(node.inputs["Scale"], path, r, f"the Scale of '{node.name}'")
+            warps.append(f"the Mapping node '{name}' has a Location, which moves the lookup off the sphere "
+                         "(unsupported here: ignored); set it to 0")
     if not (scale[0] > 0.0 and np.allclose(scale, scale[0], rtol=1e-6)):
-        r.problems.append(f"the Mapping node '{node.name}' has a Scale that is not the same positive number on "
-                          "every axis, which distorts or mirrors the map (unsupported: ignored); set it to 1")
-    return rotation.T if node.vector_type == "TEXTURE" else rotation
+        # A uniform positive scale only changes the length, which the lookup drops.
+        warps.append(f"the Mapping node '{name}' has a Scale that is not the same positive number on every axis, "
+                     "which distorts or mirrors the map (unsupported here: ignored); set it to 1")
+    inverse = np.divide(1.0, scale, out=np.zeros(3), where=scale != 0.0)  # safe_divide: x/0 = 0
+    if node.vector_type == "TEXTURE":
+        a = inverse[:, None] * rotation.T  # diag(1/s)·Rᵀ
+        return (a, -a @ location, False), rotation.T, warps
+    if node.vector_type == "NORMAL":
+        return (rotation * inverse[None, :], np.zeros(3), True), rotation, warps
+    return (rotation * scale[None, :], location, False), rotation, warps
 
 
 _AXES = {"X_AXIS": (1.0, 0.0, 0.0), "Y_AXIS": (0.0, 1.0, 0.0), "Z_AXIS": (0.0, 0.0, 1.0)}
 
 
-def _vector_rotate_lookup(node, path, r):
-    """A Vector Rotate node as m = A·x (intern/cycles/kernel/svm/vector_rotate.h)."""
-    center = _vector_input(node.inputs["Center"], path, r, f"the Center of '{node.name}'")
-    if np.any(np.abs(center) > 1e-9):
-        r.problems.append(f"the Vector Rotate node '{node.name}' has a Center, which moves the lookup off the "
-                          "sphere (unsupported: ignored); set it to 0")
+def _vector_rotate_step(node, path, r):
+    """A Vector Rotate node as a lookup step, v = Q·(x − c) + c: ((A, b,
+    normalize), Q, what makes it more than a rotation)
+    (kernel/svm/vector_rotate.h)."""
+    name = node.name
+    center = _vector_input(node.inputs["Center"], path, r, f"the Center of '{name}'")
     if node.rotation_type == "EULER_XYZ":
-        rotation = _euler_xyz(_vector_input(node.inputs["Rotation"], path, r, f"the Rotation of '{node.name}'"))
-        return rotation.T if node.invert else rotation
-    if node.rotation_type in _AXES:
-        axis = np.array(_AXES[node.rotation_type])
+        rotation = _euler_xyz(_vector_input(node.inputs["Rotation"], path, r, f"the Rotation of '{name}'"))
+        rotation = rotation.T if node.invert else rotation
     else:
-        axis = _vector_input(node.inputs["Axis"], path, r, f"the Axis of '{node.name}'")
-    length = float(np.linalg.norm(axis))
-    if length == 0.0:
-        return np.eye(3)  # Cycles leaves the vector as it is
-    angle = _float_input(node.inputs["Angle"], path, r, f"the Angle of '{node.name}'")
-    return _axis_angle(axis / length, -angle if node.invert else angle)
+        if node.rotation_type in _AXES:
+            axis = np.array(_AXES[node.rotation_type])
+        else:
+            axis = _vector_input(node.inputs["Axis"], path, r, f"the Axis of '{name}'")
+        length = float(np.linalg.norm(axis))
+        if length == 0.0:
+            return (np.eye(3), np.zeros(3), False), np.eye(3), []  # Cycles leaves the vector as it is
+        angle = _float_input(node.inputs["Angle"], path, r, f"the Angle of '{name}'")
+        rotation = _axis_angle(axis / length, -angle if node.invert else angle)
+    warps = []
+    if np.any(np.abs(center) > 1e-9):
+        warps.append(f"the Vector Rotate node '{name}' has a Center, which moves the lookup off the sphere "
+                     "(unsupported here: ignored); set it to 0")
+    return (rotation, center - rotation @ center, False), rotation, warps
 
 
 def _vector_lookup(socket, path, r):
-    """The Environment Texture's lookup m = L·d as the 3×3 L, composing the
-    Mapping and Vector Rotate nodes behind its Vector input."""
-    lookup = np.eye(3)
+    """The Environment Texture's DirectionLookup: the Mapping and Vector
+    Rotate nodes behind its Vector input, walked back to the view direction."""
+    lookup = DirectionLookup()
     source = feed(socket, path)
     while source.node is not None:
         node = source.node
         if node.bl_idname == "ShaderNodeMapping":
-            lookup = lookup @ _mapping_lookup(node, source.path, r)
+            lookup.add_before(*_mapping_step(node, source.path, r))
         elif node.bl_idname == "ShaderNodeVectorRotate":
-            lookup = lookup @ _vector_rotate_lookup(node, source.path, r)
+            lookup.add_before(*_vector_rotate_step(node, source.path, r))
         elif node.bl_idname == "ShaderNodeTexCoord":
             # In a World, Generated and Object (no object set) are the view direction.
             if source.output.identifier == "Generated" or (source.output.identifier == "Object"
@@ -347,8 +570,8 @@ def _vector_lookup(socket, path, r):
                               f"'{node.name}' (unsupported: the view direction stands in); use Generated")
             return lookup
         else:
-            r.problems.append(f"the environment's Vector comes from a {node.bl_label} node (unsupported: "
-                              "ignored); use Mapping or Vector Rotate nodes after a Texture Coordinate")
+            r.problems.append(f"the environment's Vector comes from a {node.bl_label} node '{node.name}' "
+                              "(unsupported: ignored); use Mapping or Vector Rotate nodes after a Texture Coordinate")
             return lookup
         source = feed(node.inputs["Vector"], source.path)
     if source.socket != socket:
@@ -358,6 +581,93 @@ def _vector_lookup(socket, path, r):
                           "up in one direction only (unsupported: the view direction stands in); connect a Texture "
                           "Coordinate's Generated output to it")
     return lookup
+
+
+# The lit World on a grid ---------------------------------------------------------------
+
+def environment_radiance(terms, values, width, supersampling=2, band_rows=16):
+    """(width/2, width, 3) float32: the lit World Σ weight·strength·value(m)
+    over `terms`, on an equirectangular grid of world directions d
+    (core/common/latlong.hpp), m = term.lookup(d). Each cell is the
+    solid-angle-weighted mean of supersampling² point evaluations, as the core
+    resamples a fisheye or a mirror ball. values[i]: term i's colour (3,) or
+    its image's pixels (H, W, 3), row 0 = the top, all in the one linear
+    space the result is in. Images are looked up as Blender's Environment
+    Texture does (texture_lookup); band_rows rows are evaluated at a time."""
+    height, k = width // 2, supersampling
+    out = np.zeros((height, width, 3), np.float32)
+    offsets = (np.arange(k) + 0.5) / k
+    phi = np.pi - 2.0 * np.pi * (np.arange(width)[:, None] + offsets).ravel() / width
+    images = [(term, _BlenderRows(value)) for term, value in zip(terms, values) if term.kind == "environment"]
+    for top in range(0, height, band_rows):
+        rows = np.arange(top, min(top + band_rows, height))
+        theta = np.pi * (rows[:, None] + offsets).ravel() / height
+        d = np.stack(np.broadcast_arrays(np.sin(theta)[:, None] * np.cos(phi), np.sin(theta)[:, None] * np.sin(phi),
+                                         np.cos(theta)[:, None]), axis=-1)
+        radiance = np.zeros(d.shape, np.float32)
+        for term, image in images:
+            radiance += np.float32(term.weight * term.strength) * image.lookup(
+                term.lookup(d), term.projection, term.interpolation == "Closest")
+        # Sub-rows weighted by their solid angle, ∝ sin θ.
+        weight = np.sin(theta).reshape(len(rows), k).astype(np.float32)
+        samples, cells = radiance.reshape(len(rows), k, width, k, 3), 0.0
+        for i, j in np.ndindex(k, k):
+            cells = cells + weight[:, i, None, None] * samples[:, i, :, j]
+        out[rows] = cells / (k * weight.sum(axis=1))[:, None, None]
+    for term, value in zip(terms, values):
+        if term.kind != "environment":
+            out += np.float32(term.weight * term.strength) * np.asarray(value, dtype=np.float32)
+    return out
+
+
+def texture_lookup(pixels, m, projection="EQUIRECTANGULAR", closest=False):
+    """(..., 3) colours of an Environment Texture's image (H, W, 3), row 0 =
+    the top, at lookup directions m (unit or 0), as Cycles computes them:
+    direction_to_equirectangular or direction_to_mirrorball
+    (kernel/camera/projection.h) gives (u, v), v = 0 the bottom row; the
+    image repeats on both axes (EnvironmentTextureNode::image_params), looked
+    up bilinearly about pixel centres or, for Closest, at floor(u·W, v·H).
+    Cubic and Smart are looked up bilinearly."""
+    return _BlenderRows(pixels).lookup(m, projection, closest)
+
+
+class _BlenderRows:
+    """An image's pixels as Blender stores them, bottom row first, with one
+    more row and column on every side repeating the opposite edge (the
+    texture repeats), flat: Blender's pixel (row r from the bottom, column c)
+    at (r + 1)·(W + 2) + c + 1."""
+
+    def __init__(self, pixels):
+        self.height, self.width = pixels.shape[:2]
+        bottom_up = np.asarray(pixels, dtype=np.float32)[::-1]
+        padded = np.pad(bottom_up, ((1, 1), (1, 1), (0, 0)), mode="wrap")
+        self.flat = padded.reshape(-1, padded.shape[2])
+
+    def lookup(self, m, projection, closest):
+        h, w, stride = self.height, self.width, self.width + 2
+        if projection == "MIRROR_BALL":
+            # The ball's normal halfway between the view back to the camera
+            # (−y) and m; (u, v) = its x and z, from [−1, 1] to [0, 1].
+            x, y, z = m[..., 0], m[..., 1] - 1.0, m[..., 2]
+            div = 2.0 * np.sqrt(np.maximum(-0.5 * y, 0.0))
+            div = np.where(div > 0.0, div, 1.0)
+            u, v = 0.5 * (x / div + 1.0), 0.5 * (z / div + 1.0)
+        else:
+            u = 0.5 - np.arctan2(m[..., 1], m[..., 0]) / (2.0 * np.pi)
+            v = 1.0 - np.arccos(np.clip(m[..., 2], -1.0, 1.0)) / np.pi
+        # u, v ∈ [0, 1]: Closest reads columns 0..W, bilinear −1..W (the padding).
+        x, y = (u * w).astype(np.float32), (v * h).astype(np.float32)
+        if closest:
+            column = np.clip(np.floor(x), 0, w) % w
+            row = np.clip(np.floor(y), 0, h) % h
+            return np.take(self.flat, ((row + 1) * stride + column + 1).astype(np.int64), axis=0)
+        x0, y0 = np.clip(np.floor(x - 0.5), -1, w - 1), np.clip(np.floor(y - 0.5), -1, h - 1)
+        fx, fy = (x - 0.5 - x0)[..., None], (y - 0.5 - y0)[..., None]
+        corner = ((y0 + 1) * stride + x0 + 1).astype(np.int64)
+        below = (1.0 - fx) * np.take(self.flat, corner, axis=0) + fx * np.take(self.flat, corner + 1, axis=0)
+        above = (1.0 - fx) * np.take(self.flat, corner + stride, axis=0) + fx * np.take(self.flat, corner + stride + 1,
+                                                                                         axis=0)
+        return (1.0 - fy) * below + fy * above
 
 
 # Pixels ------------------------------------------------------------------------------

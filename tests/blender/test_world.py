@@ -292,23 +292,41 @@ def test_a_full_euler_rotation_equals_the_map_resampled(addon, tmp_path, vector_
     assert np.abs(got - expected).max() < 0.01 * np.abs(expected).max(), np.abs(got - expected).max()
 
 
-def test_what_a_rotation_cannot_express_is_reported(addon, tmp_path):
+def test_what_only_a_rotation_reader_or_no_reader_can_take_is_reported(addon, tmp_path):
+    """A Location and a mirroring Scale are problems for the SH lighting, which
+    takes a rotation only, and none for the light rig, which resamples the
+    World; what neither can represent is a problem for both, naming the node
+    and the input."""
     scene = addon
     w = _map_world(scene, str(tmp_path / "map.exr"), _sky_and_sun(), (0.0, 0.0, 0.5))
-    mapping = w.node_tree.nodes["Mapping"]
-    mapping.inputs["Location"].default_value = (1.0, 0.0, 0.0)
+    tree = w.node_tree
+    mapping = tree.nodes["Mapping"]
+    mapping.inputs["Location"].default_value = (0.5, 0.0, 0.0)
     mapping.inputs["Scale"].default_value = (-1.0, 1.0, 1.0)
     reading = world.read_scene(scene)
     assert reading.kind == "environment" and not reading.supported
     assert "has a Location" in reading.note and "set it to 0" in reading.note
     assert "mirrors the map" in reading.note and "set it to 1" in reading.note
-    _refused(scene, tmp_path, "cannot be used as it is wired", "has a Location", "Source file")
+    assert world.read_scene(scene, weighted_sum=True).supported
+    _rig(scene, tmp_path, count=8)
+    # A Location driven by other nodes: its own value stands in, for both.
+    combine = tree.nodes.new("ShaderNodeCombineXYZ")
+    tree.links.new(combine.outputs[0], mapping.inputs["Location"])
+    reading = world.read_scene(scene, weighted_sum=True)
+    assert f"the Location of '{mapping.name}' comes from a Combine XYZ node" in reading.note
+    _refused(scene, tmp_path, "cannot be used as it is wired", "the Location of 'Mapping'", "Source file")
+    tree.links.remove(mapping.inputs["Location"].links[0])
+    # The camera's view of the World is not a direction: refused.
+    coords = tree.nodes["Texture Coordinate"]
+    tree.links.new(coords.outputs["Window"], mapping.inputs["Vector"])
+    _refused(scene, tmp_path, "the Window output of 'Texture Coordinate'", "use Generated")
+    tree.links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
     # A uniform scale changes nothing (the lookup drops the length).
     mapping.inputs["Location"].default_value = (0.0, 0.0, 0.0)
     mapping.inputs["Scale"].default_value = (2.0, 2.0, 2.0)
     assert world.read_scene(scene).supported
     # A Mapping whose own Vector is unconnected looks up one direction.
-    w.node_tree.links.remove(mapping.inputs["Vector"].links[0])
+    tree.links.remove(mapping.inputs["Vector"].links[0])
     assert "is not connected, so the map is looked up in one direction" in world.read_scene(scene).note
 
 

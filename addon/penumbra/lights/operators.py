@@ -24,6 +24,54 @@ _SETTING_NAMES = ("filepath", "mapping", "colorspace", "count", "sampler", "powe
                   "temporal_filter", "cluster_max", "adaptive_tolerance", "frame_start", "frame_end",
                   "limit_shadows", "json_path")
 
+# The widest grid the World's light is summed on when it is more than one
+# rotated image: the core's working map is no wider (MapOptions::max_width's
+# default), so a wider grid would only cost time.
+WORLD_GRID_MAX_WIDTH = 2048
+
+
+class _WorldSum:
+    """Frames of the World's light when it is more than one image seen through
+    a rotation (Backgrounds mixed or added, a Mapping Location or Scale):
+    every term in the config's scene_linear role, summed on a latlong grid by
+    world.environment_radiance frame by frame. A file's frames are read by
+    the core in the image's colour space (or `colorspace`); a packed image, a
+    still or a colour is the same in every frame."""
+
+    def __init__(self, core, config, working, reading, colorspace):
+        self.config, self.terms, self.values = config, reading.terms, []
+        self.frame_count, self.frames_per_second, widths = 1, 0.0, []
+        for term in self.terms:
+            if term.kind != "environment":
+                colour = np.ascontiguousarray(term.colour[None, None, :], dtype=np.float32)
+                self.values.append(config.to_scene_linear(colour, working)[0, 0])
+                continue
+            path = world.image_file(term.image)
+            if path is None:
+                pixels = config.to_scene_linear(world.image_pixels(term.image, config, colorspace), working)
+                self.values.append(pixels)
+                width = pixels.shape[1]
+            else:
+                source = core.lights.open_source(path)
+                self.values.append((source, colorspace or term.image.colorspace_settings.name))
+                width = source.width
+                self.frame_count = max(self.frame_count, source.frame_count)
+                if self.frames_per_second <= 0.0:
+                    self.frames_per_second = source.frames_per_second
+            # A mirror ball of width w spans the sphere's 2π in about 2w pixels.
+            widths.append(width if term.projection == "EQUIRECTANGULAR" else 2 * width)
+        self.width = max(2, min(WORLD_GRID_MAX_WIDTH, max(widths)) // 2 * 2)
+
+    def frame(self, index):
+        """(width/2, width, 3) scene-linear radiance of frame `index`."""
+        values = []
+        for value in self.values:
+            if isinstance(value, tuple):
+                source, space = value
+                value = self.config.to_scene_linear(source.read(min(index, source.frame_count - 1)), space)
+            values.append(value)
+        return world.environment_radiance(self.terms, values, self.width)
+
 
 class _Job:
     """One build: open the source, add frames one by one, then apply."""
@@ -35,6 +83,8 @@ class _Job:
         self.op = op
         self.strength = 1.0
         self.array = None  # pixels of a packed/generated World image, in the working space
+        self.world_sum = None  # the World's light when it is more than one rotated image
+        self.source_label = "World image (packed)"
         self.world_from_map = None
         self.mapping = op.mapping
         self.config = color.blender_config()
@@ -47,14 +97,18 @@ class _Job:
         else:
             self.path, self.colorspace = self._from_world(op.colorspace)
         self._check_colorspace(self.colorspace)
-        if self.array is not None:
+        wanted = max(1, op.frame_end - op.frame_start + 1)
+        if self.world_sum is not None:
+            self.source = None
+            self.frames = min(self.world_sum.frame_count, wanted)
+            self.fps = self.world_sum.frames_per_second
+        elif self.array is not None:
             self.source = None
             self.frames = 1
             self.fps = 0.0
         else:
             self.source = self.core.lights.open_source(self.path)
             self.fps = self.source.frames_per_second
-            wanted = max(1, op.frame_end - op.frame_start + 1)
             self.frames = min(self.source.frame_count, wanted)
         if self.frames > 1 and self.fps <= 0.0:
             self.fps = self.scene.render.fps / self.scene.render.fps_base
@@ -73,8 +127,10 @@ class _Job:
         """(path, colour space) of the World's map, read by penumbra.world with
         its strength, rotation and projection. A file is read by the core in
         its own colour space (or `colorspace`); a packed or generated image's
-        pixels go to self.array, in the working space (path '')."""
-        reading = world.read_scene(self.scene)
+        pixels go to self.array, in the working space (path ''). A World that
+        is more than one image seen through a rotation goes to self.world_sum,
+        which hands over its light summed on a latlong grid (path '')."""
+        reading = world.read_scene(self.scene, weighted_sum=True)
         if reading.kind != "environment":
             raise ValueError(f"no source file given, and the World is not lit by an image ({reading.note}): "
                              "connect an Environment Texture with an image to the Background at the active "
@@ -82,10 +138,16 @@ class _Job:
         if not reading.supported:
             raise ValueError(f"no source file given, and the World's map cannot be used as it is wired "
                              f"({reading.note}): fix that, or give a Source file")
-        self.strength = reading.strength
-        self.world_from_map = reading.world_from_map
-        self.mapping = reading.projection  # the World's own: how Blender shows the map
-        image = reading.image
+        term = reading.rotated_image
+        if term is None:
+            self.world_sum = _WorldSum(self.core, self.config, self.working, reading, colorspace)
+            self.mapping, self.source_label = "EQUIRECTANGULAR", f"World: {reading.source}"
+            # Summed in the scene_linear role, like a file; colours converted back in apply.
+            return "", self.working
+        self.strength = term.weight * term.strength
+        self.world_from_map = term.lookup.rotation.T
+        self.mapping = term.projection  # the World's own: how Blender shows the map
+        image = term.image
         path = world.image_file(image)
         if path is not None:
             return path, colorspace or image.colorspace_settings.name
@@ -96,7 +158,9 @@ class _Job:
 
     def step(self):
         """Adds the next frame; returns True when every frame is in."""
-        if self.array is not None:
+        if self.world_sum is not None:
+            self.builder.add_frame(self.world_sum.frame(self.done))
+        elif self.array is not None:
             self.builder.add_frame(self.config.to_scene_linear(self.array, self.colorspace))
         else:
             self.builder.add_frame_from(self.source, self.done, self.config if self.colorspace else None,
@@ -161,7 +225,7 @@ class _Job:
         doc = {
             "format": "penumbra-light-rig",
             "version": 1,
-            "source": self.path or "World image (packed)",
+            "source": self.path or self.source_label,
             "colorspace": self.working,
             "coordinates": "Blender world: +Z up; direction points from the scene towards the light",
             "units": "rgb = irradiance in W/m^2 on a surface facing the light, scene-linear "
