@@ -2,9 +2,14 @@
 Environment Texture lights the scene (the wired one, also inside node groups,
 for the render engine in use), the rotation of Mapping and Vector Rotate
 nodes (checked against the same map rotated in numpy, by Blender's
-equirectangular convention), the colour space of the image, plain-colour and
-broken Worlds, and that the visibility shading and the light rig, which both
-read the World through it, see the same light."""
+equirectangular convention), Mapping Location and Scale of every vector type
+and a Vector Rotate Center (the lit World checked against Cycles' own
+panorama of it, the rig's light against where the remap analytically puts
+the sun), Backgrounds mixed or added (against the sum made in numpy) and the
+Light Path Is Camera Ray trick (against a Cycles render lit by the World),
+the colour space of the image, plain-colour and broken Worlds, and that the
+visibility shading and the light rig, which both read the World through it,
+see the same light."""
 
 import json
 import math
@@ -19,7 +24,7 @@ from penumbra import compat, native, world
 from penumbra.colormap import interface
 from penumbra.visibility import scene_data
 
-from lights_scenes import _directions, _sky_and_sun, _solid_angles
+from lights_scenes import _directions, _sky_and_sun, _solid_angles, _write_map
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 SUN = np.array([0.4, -0.3, 0.8]) / np.linalg.norm([0.4, -0.3, 0.8])
@@ -328,6 +333,325 @@ def test_what_only_a_rotation_reader_or_no_reader_can_take_is_reported(addon, tm
     # A Mapping whose own Vector is unconnected looks up one direction.
     tree.links.remove(mapping.inputs["Vector"].links[0])
     assert "is not connected, so the map is looked up in one direction" in world.read_scene(scene).note
+
+
+# Location and Scale: the map looked up through any remap ------------------------------------
+
+def _panorama(scene, tmp_path, name, h, w, samples=16):
+    """(h, w, 3) the World as Cycles renders it, Blender's own L(d): an
+    equirectangular panoramic camera at the origin, turned so that its picture
+    follows the latlong convention (centre +X, top +Z; checked against the map
+    itself below). Camera rays see the World; no light is sampled."""
+    camera = bpy.data.cameras.new("Panorama")
+    camera.type = "PANO"
+    if hasattr(camera, "panorama_type"):
+        camera.panorama_type = "EQUIRECTANGULAR"
+    else:  # Blender 3.x keeps it in Cycles' settings
+        camera.cycles.panorama_type = "EQUIRECTANGULAR"
+    ob = bpy.data.objects.new("Panorama", camera)
+    ob.rotation_euler = (math.pi / 2, 0.0, -math.pi / 2)
+    scene.collection.objects.link(ob)
+    scene.camera = ob
+    scene.world.cycles.sampling_method = "NONE"
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = False
+    scene.cycles.filter_width = 0.01  # samples stay inside their pixel
+    scene.render.resolution_x, scene.render.resolution_y = w, h
+    scene.render.resolution_percentage = 100
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.filepath = str(tmp_path / name)
+    bpy.ops.render.render(write_still=True)
+    return _core().image.read(str(tmp_path / name) + ".exr")[..., :3]
+
+
+def _relative_error(got, expected):
+    """‖got − expected‖ / ‖expected‖ over the sphere (each pixel by its solid angle)."""
+    omega = _solid_angles(*expected.shape[:2])[:, None, None]
+    return math.sqrt((omega * (got - expected) ** 2).sum() / (omega * expected ** 2).sum())
+
+
+def _smooth_map(h=64, w=128):
+    """A map without edges, so that a render's samples and the grid's agree."""
+    d = _directions(h, w)
+    return (0.1 + 2.0 * np.clip(d @ SUN, 0, None)[..., None] ** 3 * np.array([1.0, 0.8, 0.5])
+            + 0.2 * (0.5 + 0.5 * d)).astype(np.float32)
+
+
+def test_a_panoramic_cycles_render_of_the_world_is_the_map(addon, tmp_path):
+    """The reference the remap tests compare with: Cycles' panorama of a plain
+    World, looked up Closest, is the map pixel for pixel."""
+    scene = addon
+    pixels = _smooth_map()
+    w = _map_world(scene, str(tmp_path / "map.exr"), pixels)
+    w.node_tree.nodes["Environment Texture"].interpolation = "Closest"
+    np.testing.assert_allclose(_panorama(scene, tmp_path, "plain", *pixels.shape[:2]), pixels, rtol=1e-6)
+
+
+def _vector_rotate_about_a_center(tree, env):
+    rotate = tree.nodes.new("ShaderNodeVectorRotate")
+    rotate.rotation_type = "AXIS_ANGLE"
+    rotate.inputs["Axis"].default_value = (0.3, -1.0, 0.5)
+    rotate.inputs["Angle"].default_value = 0.8
+    rotate.inputs["Center"].default_value = (0.2, 0.4, -0.3)
+    return _drive_vector(tree, env, rotate)
+
+
+# (vector type, Location, Rotation, Scale); VECTOR and NORMAL have no Location.
+_REMAPS = {
+    "point": ("POINT", (0.3, -0.5, 0.2), (0.3, -0.2, 1.0), (1.0, 2.0, 0.5)),
+    "texture": ("TEXTURE", (0.3, -0.5, 0.2), (0.3, -0.2, 1.0), (1.0, 2.0, 0.5)),
+    "vector": ("VECTOR", None, (0.0, 0.4, 0.2), (1.0, 2.0, 0.5)),
+    "normal": ("NORMAL", None, (0.0, 0.4, 0.2), (1.0, -2.0, 0.5)),
+    "mirror_ball": ("POINT", (0.2, 0.1, -0.4), (0.0, 0.0, 0.7), (1.5, 1.0, 1.0)),
+}
+
+
+@pytest.mark.parametrize("case", [*_REMAPS, "vector_rotate_center"])
+def test_a_mapping_location_and_scale_look_the_map_up_where_cycles_does(addon, tmp_path, case):
+    """The World's light on a latlong grid (world.environment_radiance, what
+    the light rig is built from) against Cycles' own panorama of the World,
+    for Mapping nodes of each type with a Location, a Rotation and a
+    non-uniform or negative Scale, a mirror-ball image, and a Vector Rotate
+    about a Center."""
+    scene = addon
+    pixels = _smooth_map()
+    if case == "mirror_ball":
+        ball = np.full((64, 64, 3), 0.2, np.float32)
+        u, v = np.meshgrid(np.linspace(-1, 1, 64), np.linspace(1, -1, 64))
+        ball[..., 0] += 0.5 * (1 + u)
+        ball[..., 1] += 0.5 * (1 + v)
+        pixels = ball
+    w, tree = _new_world(scene, case)
+    env = _environment(tree, _image(str(tmp_path / f"{case}.exr"), pixels))
+    if case == "vector_rotate_center":
+        _vector_rotate_about_a_center(tree, env)
+    else:
+        vector_type, location, rotation, scale = _REMAPS[case]
+        mapping = _mapping(tree, env, rotation, vector_type)
+        mapping.inputs["Scale"].default_value = scale
+        if location is not None:
+            mapping.inputs["Location"].default_value = location
+    if case == "mirror_ball":
+        env.projection = "MIRROR_BALL"
+    h, w_ = 64, 128
+    rendered = _panorama(scene, tmp_path, f"{case}_render", h, w_)
+    reading = world.read_scene(scene, weighted_sum=True)
+    assert reading.supported and reading.rotated_image is None, reading.note
+    values = [world.image_pixels(term.image) for term in reading.terms]
+    got = world.environment_radiance(reading.terms, values, w_)
+    assert got.shape == (h, w_, 3)
+    assert _relative_error(got, rendered) < 0.015, _relative_error(got, rendered)
+    # The remap matters: the plain map is far from it.
+    if case != "mirror_ball":
+        assert _relative_error(pixels, rendered) > 0.1
+
+
+def _remapped_light(pixels, remap):
+    """The light of a map looked up at remap(d), independently of world.py:
+    nearest pixels by the latlong convention, on a 4× finer grid, in numpy.
+    Returns (its flux-weighted mean direction, ∫ L dω per channel)."""
+    h, w = pixels.shape[0] * 4, pixels.shape[1] * 4
+    d = _directions(h, w)
+    m = remap(d)
+    m = m / np.linalg.norm(m, axis=-1, keepdims=True)
+    ph, pw = pixels.shape[:2]
+    col = np.floor(pw * (0.5 - np.arctan2(m[..., 1], m[..., 0]) / (2 * math.pi))).astype(int) % pw
+    row = np.clip(np.floor(ph * np.arccos(np.clip(m[..., 2], -1, 1)) / math.pi).astype(int), 0, ph - 1)
+    flux = pixels[row, col] * _solid_angles(h, w)[:, None, None]
+    return ((flux @ LUMINANCE)[..., None] * d).sum(axis=(0, 1)), flux.sum(axis=(0, 1))
+
+
+def test_a_mapping_location_puts_the_sun_where_the_lookup_sees_it(addon, tmp_path):
+    """Mapping POINT with a Location t looks the map up at normalize(d + t),
+    so the map's sun at s is seen where d + t ∥ s: d = k·s − t with |d| = 1,
+    k = s·t + √((s·t)² − |t|² + 1). The rig's light goes there, and its total
+    is the remapped World's ∫ L dω (a Location changes the solid angle the
+    sun covers)."""
+    scene = addon
+    pixels = _sky_and_sun(sun=SUN, sky=0.0)
+    t = np.array([0.5, 0.2, -0.3])
+    w = _map_world(scene, str(tmp_path / "map.exr"), pixels, (0.0, 0.0, 0.0))
+    w.node_tree.nodes["Mapping"].inputs["Location"].default_value = t
+    k = SUN @ t + math.sqrt((SUN @ t) ** 2 - t @ t + 1.0)
+    seen = k * SUN - t
+    assert abs(np.linalg.norm(seen) - 1.0) < 1e-9 and _angle(seen, SUN) > 20.0
+    directions, rgb = _rig(scene, tmp_path, count=16)
+    assert _angle(_rig_moment(directions, rgb), seen) < 2.0, _angle(_rig_moment(directions, rgb), seen)
+    moment, total = _remapped_light(pixels, lambda d: d + t)
+    assert _angle(_rig_moment(directions, rgb), moment) < 1.0
+    np.testing.assert_allclose(rgb.sum(axis=0), total, rtol=0.02)
+    assert abs(rgb.sum() / (pixels * _solid_angles(64, 128)[:, None, None]).sum() - 1.0) > 0.1
+
+
+def test_a_uniform_scale_changes_nothing_and_others_bend_or_mirror_the_map(addon, tmp_path):
+    """Scale s looks the map up at normalize(s∘d): (2, 2, 2) is the plain map,
+    rig for rig; (1, 1, 3) sees the sun at normalize(s_x, s_y, s_z/3), lower;
+    (−1, 1, 1) mirrors it to (−s_x, s_y, s_z)."""
+    scene = addon
+    pixels = _sky_and_sun(sun=SUN, sky=0.0)
+    w = _map_world(scene, str(tmp_path / "map.exr"), pixels, (0.0, 0.0, 0.0))
+    plain = _rig(scene, tmp_path, name="plain.json")
+    scale = w.node_tree.nodes["Mapping"].inputs["Scale"]
+    scale.default_value = (2.0, 2.0, 2.0)
+    assert world.read_scene(scene, weighted_sum=True).rotated_image is not None
+    uniform = _rig(scene, tmp_path, name="uniform.json")
+    np.testing.assert_allclose(uniform[0], plain[0], atol=1e-9)
+    np.testing.assert_allclose(uniform[1], plain[1], rtol=1e-9)
+    for factors, seen in (((1.0, 1.0, 3.0), SUN / np.array([1.0, 1.0, 3.0])),
+                          ((-1.0, 1.0, 1.0), SUN * np.array([-1.0, 1.0, 1.0]))):
+        scale.default_value = factors
+        directions, rgb = _rig(scene, tmp_path, name="scaled.json")
+        moment, total = _remapped_light(pixels, lambda d: d * np.array(factors))
+        assert _angle(_rig_moment(directions, rgb), seen) < 3.0, (factors, _angle(_rig_moment(directions, rgb), seen))
+        assert _angle(_rig_moment(directions, rgb), moment) < 1.0
+        np.testing.assert_allclose(rgb.sum(axis=0), total, rtol=0.02)
+
+
+def test_a_remapped_world_image_that_is_a_sequence_or_packed_gives_every_frame(addon, tmp_path):
+    """The resampled path reads what the rotated path reads: a World image
+    that is the first of a numbered sequence gives one rig frame per file
+    (here three exposures, so three totals in ratio 1 : 2 : 3), and the same
+    image packed into the .blend gives the file's first frame."""
+    scene = addon
+    folder = tmp_path / "seq"
+    folder.mkdir()
+    pixels = _sky_and_sun(sun=SUN, sky=0.05)
+    for i in range(3):
+        _write_map(str(folder / f"sky_{i + 1:04d}.exr"), (i + 1) * pixels)
+    w, tree = _new_world(scene)
+    env = _environment(tree, bpy.data.images.load(str(folder / "sky_0001.exr")))
+    _mapping(tree, env, (0.0, 0.0, 0.0)).inputs["Location"].default_value = (0.0, 0.3, 0.4)
+    json_path = str(tmp_path / "sequence.json")
+    assert bpy.ops.penumbra.build_light_rig(count=8, frame_start=1, frame_end=3, temporal_filter=False,
+                                            json_path=json_path) == {"FINISHED"}
+    frames = json.load(open(json_path))["frames"]
+    totals = np.array([sum(l["rgb"][1] for l in f["lights"]) for f in frames])
+    np.testing.assert_allclose(totals / totals[0], [1.0, 2.0, 3.0], rtol=1e-5)
+    env.image.pack()
+    directions, rgb = _rig(scene, tmp_path, count=8, name="packed.json")
+    first = frames[0]["lights"]
+    np.testing.assert_allclose(directions, [l["direction"] for l in first], atol=1e-5)
+    np.testing.assert_allclose(rgb, [l["rgb"] for l in first], rtol=1e-4)
+
+
+# Backgrounds mixed and added -------------------------------------------------------------
+
+def _constant_background(tree, colour, strength):
+    background = tree.nodes.new("ShaderNodeBackground")
+    background.inputs["Color"].default_value = (*colour, 1.0)
+    background.inputs["Strength"].default_value = strength
+    return background
+
+
+def _combine(tree, idname, first, second):
+    """`first` and `second` Backgrounds into a Mix or Add Shader at the World Output."""
+    node = tree.nodes.new(idname)
+    inputs = (1, 2) if idname == "ShaderNodeMixShader" else (0, 1)
+    tree.links.new(first.outputs[0], node.inputs[inputs[0]])
+    tree.links.new(second.outputs[0], node.inputs[inputs[1]])
+    tree.links.new(node.outputs[0], tree.nodes["World Output"].inputs["Surface"])
+    return node
+
+
+@pytest.mark.parametrize("idname, shares", [("ShaderNodeMixShader", (0.7, 0.3)), ("ShaderNodeAddShader", (1.0, 1.0))])
+def test_a_background_mixed_with_a_constant_colour_lights_as_their_weighted_sum(addon, tmp_path, idname, shares):
+    """A Mix Shader of Fac 0.3 gives its first Background 0.7 and its second
+    0.3 (an Add Shader 1 and 1): the image at strength 2 plus a colour at
+    strength 1.5 light as that sum, made in numpy and built from a file."""
+    scene = addon
+    pixels = _sky_and_sun(sun=SUN, sky=0.05)
+    colour = np.array([0.2, 0.3, 0.5])
+    summed = shares[0] * 2.0 * pixels + shares[1] * 1.5 * colour
+    json_path = str(tmp_path / "file.json")
+    assert bpy.ops.penumbra.build_light_rig(filepath=_write_map(str(tmp_path / "summed.exr"), summed), count=16,
+                                            json_path=json_path) == {"FINISHED"}
+    lights = json.load(open(json_path))["frames"][0]["lights"]
+    from_file = np.array([l["direction"] for l in lights]), np.array([l["rgb"] for l in lights])
+    w, tree = _new_world(scene)
+    _environment(tree, _image(str(tmp_path / "map.exr"), pixels))
+    tree.nodes["Background"].inputs["Strength"].default_value = 2.0
+    node = _combine(tree, idname, tree.nodes["Background"], _constant_background(tree, colour, 1.5))
+    if idname == "ShaderNodeMixShader":
+        node.inputs["Fac"].default_value = 0.3
+    reading = world.read_scene(scene, weighted_sum=True)
+    assert reading.supported and [t.weight for t in reading.terms] == pytest.approx(shares)
+    directions, rgb = _rig(scene, tmp_path, count=16)
+    total = (summed * _solid_angles(*pixels.shape[:2])[:, None, None]).sum(axis=(0, 1))
+    np.testing.assert_allclose(rgb.sum(axis=0), total, rtol=3e-3)
+    np.testing.assert_allclose(from_file[1].sum(axis=0), total, rtol=1e-4)
+    assert _angle(_rig_moment(directions, rgb), _rig_moment(*from_file)) < 1.0
+    # The SH lighting takes one Background: it says so.
+    assert "adds 2 Backgrounds" in scene_data.read_world(scene).note
+
+
+def _plane_lit(scene, tmp_path, name):
+    """Mean pixel of a white diffuse plane seen from straight above by an
+    orthographic camera that sees nothing else (32x32, 64 spp, Cycles)."""
+    if "Plane" not in scene.objects:
+        bpy.ops.mesh.primitive_plane_add(size=4.0)
+        material = bpy.data.materials.new("White")
+        tree = compat.ensure_nodes(material)
+        diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+        diffuse.inputs["Color"].default_value = (0.8, 0.8, 0.8, 1.0)
+        tree.links.new(diffuse.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+        scene.objects["Plane"].data.materials.append(material)
+        camera = bpy.data.objects.new("Above", bpy.data.cameras.new("Above"))
+        camera.data.type, camera.data.ortho_scale = "ORTHO", 1.0
+        camera.location = (0.0, 0.0, 3.0)
+        scene.collection.objects.link(camera)
+        scene.camera = camera
+    scene.render.engine = "CYCLES"
+    scene.cycles.device, scene.cycles.samples, scene.cycles.use_denoising = "CPU", 64, False
+    scene.render.resolution_x = scene.render.resolution_y = 32
+    scene.render.resolution_percentage = 100
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    scene.render.filepath = str(tmp_path / name)
+    bpy.ops.render.render(write_still=True)
+    return _core().image.read(str(tmp_path / name) + ".exr")[..., :3].reshape(-1, 3).mean(axis=0)
+
+
+def test_is_camera_ray_lights_with_one_background_and_shows_the_camera_the_other(addon, tmp_path):
+    """The Light Path trick: Mix Shader with Fac = Is Camera Ray, the image on
+    the first Shader, a bright white on the second. Every ray that lights a
+    surface sees Fac 0, so the rig is the image's alone, and a Cycles render
+    of a plane lit by this World is the render of the plane lit by the rig,
+    not the white's 0.8·5."""
+    scene = addon
+    pixels = _sky_and_sun(sun=SUN, sky=0.2, radius=0.2, sun_radiance=20.0)
+    w, tree = _new_world(scene, "Camera Trick")
+    _environment(tree, _image(str(tmp_path / "map.exr"), pixels))
+    white = _constant_background(tree, (1.0, 1.0, 1.0), 5.0)
+    mix = _combine(tree, "ShaderNodeMixShader", tree.nodes["Background"], white)
+    light_path = tree.nodes.new("ShaderNodeLightPath")
+    tree.links.new(light_path.outputs["Is Camera Ray"], mix.inputs["Fac"])
+    reading = world.read_scene(scene, weighted_sum=True)
+    assert reading.supported and len(reading.terms) == 1 and "to the camera only" in reading.note
+    # Blender's own evaluation first (no rig in the scene yet): the plane lit
+    # by the World gets the rig's irradiance Σ rgb·max(0, d_z).
+    w.cycles.sampling_method = "MANUAL"  # a small importance map: seconds, not minutes
+    w.cycles.sample_map_resolution = 256
+    world_lit = _plane_lit(scene, tmp_path, "world")
+    directions, rgb = _rig(scene, tmp_path, count=64)
+    expected = 0.8 * (rgb.T @ np.clip(directions[:, 2], 0, None)) / math.pi
+    np.testing.assert_allclose(world_lit, expected, rtol=0.03)
+    assert np.all(world_lit < 0.5 * 0.8 * 5.0)
+    assert scene_data.read_world(scene).supported
+    # The rig is the image's alone.
+    _map_world(scene, str(tmp_path / "alone.exr"), pixels)
+    alone = _rig(scene, tmp_path, count=64, name="alone.json")
+    np.testing.assert_allclose(directions, alone[0], atol=1e-9)
+    np.testing.assert_allclose(rgb, alone[1], rtol=1e-9)
+    scene.world = w
+    # Swapped, the image is the camera's only: no image lights the scene.
+    tree.links.new(tree.nodes["Background"].outputs[0], mix.inputs[2])
+    tree.links.new(white.outputs[0], mix.inputs[1])
+    _refused(scene, tmp_path, "not lit by an image", "to the camera only", "Source file")
+    # Is Diffuse Ray is 1 for a bounce but 0 for a light sample: refused, named.
+    tree.links.new(light_path.outputs["Is Diffuse Ray"], mix.inputs["Fac"])
+    _refused(scene, tmp_path, f"the Fac of the Mix Shader '{mix.name}' comes from the Is Diffuse Ray output of the "
+                              f"Light Path node '{light_path.name}'")
 
 
 def test_a_mirror_ball_world_is_decomposed_as_a_mirror_ball(addon, tmp_path):
