@@ -81,7 +81,7 @@ def test_bake_replaces_a_noise_driven_ramp_and_keeps_the_original(addon, tmp_pat
     assert len(weights) == 3 and sum(weights) == pytest.approx(1.0)  # Detail 2 (the default): 3 octaves
     # The lookup image: float EXR, no colour transform, no wrap.
     image_node = next(n for n in group_node.node_tree.nodes if n.bl_idname == "ShaderNodeTexImage")
-    assert image_node.extension == "EXTEND" and image_node.interpolation == "Linear"
+    assert image_node.extension == "EXTEND" and image_node.interpolation == "Closest"
     image = image_node.image
     assert image.colorspace_settings.name == "Non-Color" and image.is_float
     path = bpy.path.abspath(image.filepath)
