@@ -205,17 +205,19 @@ def run_sweeps():
     return out
 
 
-def seed_statistics(data):
+def seed_statistics(data, key="rmse"):
     """{scene: {method: {n: dict(mean, std, seeds, seconds, cpu)}}} over the
-    seeds of the run's config; std is the sample standard deviation (n − 1)."""
+    seeds of the run's config of the error `key` (rmse: every pixel;
+    rmse_interior: pixels away from silhouettes); std is the sample standard
+    deviation (n − 1)."""
     cfg, stats = data["config"], {}
     for name in cfg["scenes"]:
         for method in ("plain", "penumbra"):
             for n in cfg["spp"]:
                 runs = [data["renders"].get(f"{name}|{method}|{n}|{seed}") for seed in range(cfg["seeds"])]
-                if any(r is None for r in runs):
+                if any(r is None or r.get(key) is None for r in runs):
                     continue
-                errors = np.array([r["rmse"] for r in runs])
+                errors = np.array([r[key] for r in runs])
                 stats.setdefault(name, {}).setdefault(method, {})[n] = {
                     "mean": float(errors.mean()), "std": float(errors.std(ddof=1)) if len(errors) > 1 else 0.0,
                     "seeds": len(errors), "seconds": float(np.mean([r["seconds"] for r in runs])),
@@ -433,7 +435,7 @@ def bench_render():
                 "harness; not the published sweep.", ""]
     results = run_sweeps()
     out += sweep_method(results)
-    VERDICTS = []
+    VERDICTS, interior = [], {}
     figures = os.path.join(DOCS, "colormap")
     os.makedirs(figures, exist_ok=True)
     for renderer in RENDERERS:
@@ -455,14 +457,30 @@ def bench_render():
         if renderer == "eevee":
             out += eevee_checks(data)
         out += estimate_lines(data)
-    out += ["### Done when (issue #12)", "", "| result | renderer | scene | criterion | values |",
-            "|---|---|---|---|---|"]
+        interior[renderer] = criteria(renderer, seed_statistics(data, "rmse_interior"), data["config"])
+    out += ["### Done when (issue #12)", "", "Every pixel, as the issue measures:", "",
+            "| result | renderer | scene | criterion | values |", "|---|---|---|---|---|"]
     out += [f"| {'**FAIL**' if v[0] == 'FAIL' else v[0]} | {v[1]} | {v[2]} | {v[3]} | {v[4]} |" for v in VERDICTS]
+    out += interior_lines(interior)
     pictures = write_pictures(figures)
     if pictures:
         out += ["", "Pictures (sRGB, the benchmark plane, seed 0): " +
                 ", ".join(f"[{n}](colormap/{n}.png)" for n in pictures)]
     return out + [""]
+
+
+def interior_lines(interior):
+    """The same criteria over pixels at least SILHOUETTE_MARGIN pixels from the
+    background (informative: the verdicts above are the issue's)."""
+    rows = [(renderer,) + v for renderer, verdicts in interior.items() for v in verdicts if v[0] != "SKIP"]
+    if not rows:
+        return []
+    return ["", "The same criteria away from silhouettes (pixels at least 2 pixels from any pixel where the "
+            "reference shows the black background: the horizon of the planes, the outline and hole of the torus). "
+            "A silhouette aliases at low sample counts whatever the texture filter does, so this separates the "
+            "filter's own error from geometric aliasing. Informative only: the verdicts above are the issue's.", "",
+            "| result | renderer | scene | criterion | values |", "|---|---|---|---|---|"] + [
+        f"| {'**FAIL**' if v[1] == 'FAIL' else v[1]} | {v[0]} | {v[2]} | {v[3]} | {v[4]} |" for v in rows]
 
 
 def bench_footprint():

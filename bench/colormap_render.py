@@ -38,6 +38,7 @@ import sys
 import time
 
 import bpy
+import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "build", "addon"))
@@ -46,10 +47,11 @@ import colormap_scene  # noqa: E402
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
 
-HARNESS_VERSION = 1          # bump when a change here changes what an entry means
+HARNESS_VERSION = 2          # bump when a change here changes what an entry means
 BASE_SIZE = (192, 108)
 RENDERS = 0                  # renders made by this process
 METHODS = ("plain", "penumbra")
+SILHOUETTE_MARGIN = 2        # pixels: the pixel filter's reach (1.5) rounded up
 
 # name: (builder in colormap_scene, its keyword arguments, resolution factor, description)
 SCENES = {
@@ -271,8 +273,22 @@ def read(path):
     return native.require().image.read(path)
 
 
-def rmse(image, reference):
-    return float((((image - reference) ** 2).mean()) ** 0.5)
+def rmse(image, reference, mask=None):
+    squared = (image - reference) ** 2
+    return float((squared.mean() if mask is None else squared[mask].mean()) ** 0.5)
+
+
+def interior_mask(reference, margin=SILHOUETTE_MARGIN):
+    """Pixels at least `margin` pixels from any pixel the reference shows the
+    (black) background in. Silhouettes alias at low sample counts whatever
+    the texture does; the error away from them is the texture filter's own."""
+    covered = reference.sum(axis=2) > 1e-6     # no ramp stop is black; the world is
+    padded = np.pad(covered, margin, constant_values=True)
+    interior = np.ones_like(covered)
+    for dy in range(2 * margin + 1):
+        for dx in range(2 * margin + 1):
+            interior &= padded[dy:dy + covered.shape[0], dx:dx + covered.shape[1]]
+    return interior
 
 
 def log(*args):
@@ -315,11 +331,12 @@ def sweep_scene(runner, name, cfg, out, results, addon):
         return
     ctx = build(runner, name, size, cfg, out)
     folder = os.path.join(out, runner.name, name)
-    references = {}
+    references, interiors = {}, {}
     for seed in seeds:
         ref_id = runner.reference_id(seed)
         if ref_id not in references:
             references[ref_id] = reference(runner, ctx, seed, sig["reference"], folder, results)
+            interiors[ref_id] = interior_mask(references[ref_id])
     for method in METHODS:
         pending = sorted((seed, spp) for m, spp, seed in todo if m == method)
         if not pending:
@@ -332,11 +349,14 @@ def sweep_scene(runner, name, cfg, out, results, addon):
             update(ctx.scene)
             path = os.path.join(folder, f"{method}_{spp}spp_seed{seed}.exr")
             seconds, cpu = render(ctx.scene, path)
-            error = rmse(read(path), references[runner.reference_id(seed)])
+            image, ref_id = read(path), runner.reference_id(seed)
+            error = rmse(image, references[ref_id])
+            interior = rmse(image, references[ref_id], interiors[ref_id]) if interiors[ref_id].any() else None
             if seed != 0:  # seed 0 stays for the pictures
                 os.remove(path)
             results.put("renders", render_key(name, method, spp, seed), {
-                "scene": name, "method": method, "spp": spp, "seed": seed, "rmse": error, "seconds": seconds,
+                "scene": name, "method": method, "spp": spp, "seed": seed, "rmse": error, "rmse_interior": interior,
+                "interior_fraction": float(interiors[ref_id].mean()), "seconds": seconds,
                 "cpu_seconds": cpu, "size": list(size), "signature": sig[method], "warm_up_seconds": warm_up,
                 "driven": driven_values(ctx.material)})
             log(f"{name:20s} {method:8s} {spp:4d} spp seed {seed}: RMSE {error:.5f}  {seconds:.2f} s")
