@@ -161,8 +161,8 @@ void bind_sources(py::module_& m) {
     m.def("read_map", &read_map, py::arg("path"), py::arg("mapping") = map.projection,
           py::arg("max_width") = map.max_width, py::arg("config") = py::none(), py::arg("colorspace") = "",
           py::arg("band_bytes") = std::size_t(16) << 20, py::arg("threads") = map.threads,
-    "The working map of an image file (lights/map_reader.hpp): lat-long files wider than max_width are read band "
-    "by band and reduced as they arrive. Dict: pixels (h, w, 3) scene-linear, full_sphere, defects, "
+    "The working map of an image file (lights/map_reader.hpp): files wider than max_width are read band by band "
+    "(lat-long: reduced as the rows arrive; fisheye, mirror ball: each band's look-ups taken). Dict: pixels (h, w, 3) scene-linear, full_sphere, defects, "
     "source_integral_luminance, streamed, bands, buffer_bytes (largest input buffers held at once).");
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -30,17 +31,23 @@ Image to_rgb(const Image& in) {
     return out;
 }
 
+// The input row a look-up at continuous row position y reads first (pixel
+// centres at +0.5, clamped to the image): the band that holds it takes it.
+int lookup_top_row(double y, int height) { return int(std::clamp(y - 0.5, 0.0, double(height - 1))); }
+
 // Bilinear look-up at continuous position (x, y), pixel centres at +0.5,
-// clamped to the image.
-void bilinear(const Image& image, double x, double y, double out[3]) {
-    const double fx = std::clamp(x - 0.5, 0.0, double(image.width - 1));
-    const double fy = std::clamp(y - 0.5, 0.0, double(image.height - 1));
+// clamped to the image, from RGB rows held from input row `first` on.
+void bilinear(const float* rows, int first, int width, int height, double x, double y, double out[3]) {
+    const double fx = std::clamp(x - 0.5, 0.0, double(width - 1));
+    const double fy = std::clamp(y - 0.5, 0.0, double(height - 1));
     const int x0 = int(fx), y0 = int(fy);
-    const int x1 = std::min(x0 + 1, image.width - 1), y1 = std::min(y0 + 1, image.height - 1);
+    const int x1 = std::min(x0 + 1, width - 1), y1 = std::min(y0 + 1, height - 1);
     const double ax = fx - x0, ay = fy - y0;
+    const float* top = rows + std::size_t(y0 - first) * width * 3;
+    const float* bottom = rows + std::size_t(y1 - first) * width * 3;
     for (int c = 0; c < 3; ++c)
-        out[c] = (1 - ay) * ((1 - ax) * image.at(x0, y0, c) + ax * image.at(x1, y0, c)) +
-                 ay * ((1 - ax) * image.at(x0, y1, c) + ax * image.at(x1, y1, c));
+        out[c] = (1 - ay) * ((1 - ax) * top[x0 * 3 + c] + ax * top[x1 * 3 + c]) +
+                 ay * ((1 - ax) * bottom[x0 * 3 + c] + ax * bottom[x1 * 3 + c]);
 }
 
 }  // namespace
@@ -98,14 +105,31 @@ void reduce_latlong_rows(const LatLongSpans& spans, const float* band, int band_
     });
 }
 
-double latlong_row_luminance(Projection projection, int in_width, int in_height, int row, const float* rgb) {
+double input_row_luminance(const MapOptions& options, int in_width, int in_height, int row, const float* rgb) {
     const auto& Y = rec709_luminance;
-    const double omega = pixel_solid_angle(projection, {}, in_width, in_height, 0, row);
     double row_sum = 0.0;
-    if (omega == 0.0) return 0.0;
-    for (int c = 0; c < in_width; ++c)
+    if (is_latlong(options.projection)) {
+        // One solid angle for the whole row.
+        const double omega = pixel_solid_angle(options.projection, {}, in_width, in_height, 0, row);
+        if (omega == 0.0) return 0.0;
+        for (int c = 0; c < in_width; ++c)
+            row_sum += omega * (Y[0] * rgb[3 * c] + Y[1] * rgb[3 * c + 1] + Y[2] * rgb[3 * c + 2]);
+        return row_sum;
+    }
+    for (int c = 0; c < in_width; ++c) {
+        const double omega = pixel_solid_angle(options.projection, options.lens, in_width, in_height, c, row);
+        if (omega == 0.0) continue;
         row_sum += omega * (Y[0] * rgb[3 * c] + Y[1] * rgb[3 * c + 1] + Y[2] * rgb[3 * c + 2]);
+    }
     return row_sum;
+}
+
+void check_map_options(const MapOptions& options) {
+    if (options.max_width < 0 || (options.max_width > 0 && options.max_width < 4))
+        throw ArgumentError("max_width must be 0 (no limit) or at least 4, got " + std::to_string(options.max_width));
+    if (options.supersampling < 1 || options.supersampling > 16)
+        throw ArgumentError("supersampling must be between 1 and 16, got " + std::to_string(options.supersampling));
+    if (options.projection == Projection::fisheye) options.lens.check();
 }
 
 double EnvironmentMap::theta_max() const { return full_sphere ? latlong::full_sphere : latlong::upper_hemisphere; }
@@ -125,30 +149,13 @@ void check_map_input(const Image& radiance, const MapOptions& options) {
                             std::to_string(radiance.height) + "); give an image with pixels");
     if (radiance.channels < 1 || radiance.channels > 4)
         throw ArgumentError("the environment image needs 1 to 4 channels, got " + std::to_string(radiance.channels));
-    if (options.max_width < 0 || (options.max_width > 0 && options.max_width < 4))
-        throw ArgumentError("max_width must be 0 (no limit) or at least 4, got " + std::to_string(options.max_width));
-    if (options.supersampling < 1 || options.supersampling > 16)
-        throw ArgumentError("supersampling must be between 1 and 16, got " + std::to_string(options.supersampling));
-    if (options.projection == Projection::fisheye) options.lens.check();
+    check_map_options(options);
 }
 
 // Σ Y·Ω over the input's pixels, each with its own projection's solid angle.
 double input_integral_luminance(const Image& in, const MapOptions& options) {
-    const auto& Y = rec709_luminance;
     double sum = 0.0;
-    for (int r = 0; r < in.height; ++r) {
-        if (is_latlong(options.projection)) {
-            sum += latlong_row_luminance(options.projection, in.width, in.height, r, in.row(r));
-            continue;
-        }
-        double row_sum = 0.0;
-        for (int c = 0; c < in.width; ++c) {
-            const double omega = pixel_solid_angle(options.projection, options.lens, in.width, in.height, c, r);
-            if (omega == 0.0) continue;
-            row_sum += omega * (Y[0] * in.at(c, r, 0) + Y[1] * in.at(c, r, 1) + Y[2] * in.at(c, r, 2));
-        }
-        sum += row_sum;
-    }
+    for (int r = 0; r < in.height; ++r) sum += input_row_luminance(options, in.width, in.height, r, in.row(r));
     return sum;
 }
 
@@ -182,8 +189,8 @@ struct ResampleGrid {
     int width, height, supersampling;
 };
 
-ResampleGrid resample_grid(const Image& in, const MapOptions& options, bool full_sphere) {
-    const double radius = 0.5 * std::min(in.width, in.height);
+ResampleGrid resample_grid(int in_width, int in_height, const MapOptions& options, bool full_sphere) {
+    const double radius = 0.5 * std::min(in_width, in_height);
     const int aspect = full_sphere ? 2 : 4;
     int h = full_sphere ? int(std::ceil(0.5 * pi * radius)) : int(std::ceil(radius));
     h = std::max(h, 4);
@@ -198,55 +205,166 @@ ResampleGrid resample_grid(const Image& in, const MapOptions& options, bool full
     return {w, h, ss};
 }
 
-// Mean of ss² bilinear look-ups spread evenly over the solid angle of output
-// cell (r, c); look-ups outside the image circle count as black.
-void resample_cell(const Image& in, const MapOptions& options, const EnvironmentMap& map, int ss, int r, int c,
-                   float* dst) {
-    const double t0 = latlong::theta_of_y(r, map.height, map.theta_max());
-    const double t1 = latlong::theta_of_y(r + 1, map.height, map.theta_max());
-    double acc[3] = {0, 0, 0}, wsum = 0.0;
+}  // namespace
+
+// Calls look_up(x, y) for each of the ss² look-ups of output cell (r, c)
+// that land inside the image circle (the others count as black), in the
+// same order every time: the index pass and the band passes must agree on
+// every position.
+template <class LookUp>
+void BandResampler::for_each_look_up(int r, int c, LookUp&& look_up) const {
+    const int ss = supersampling_;
     for (int j = 0; j < ss; ++j) {
-        // Sub-rows equally spaced in cos θ, so each look-up stands for the
-        // same solid angle.
-        const double z = std::cos(t0) + (std::cos(t1) - std::cos(t0)) * (j + 0.5) / ss;
-        const double theta = std::acos(std::clamp(z, -1.0, 1.0));
+        const double sin_theta = sub_row_sin_[std::size_t(r) * ss + j], cos_theta = sub_row_cos_[std::size_t(r) * ss + j];
         for (int i = 0; i < ss; ++i) {
-            const double phi = latlong::phi_of_x(c + (i + 0.5) / ss, map.width);
-            const Eigen::Vector3d d = latlong::direction_of_angles(theta, phi);
+            const Eigen::Vector3d d(sin_theta * sub_column_cos_[std::size_t(c) * ss + i],
+                                    sin_theta * sub_column_sin_[std::size_t(c) * ss + i], cos_theta);
             double x, y;
-            if (!direction_to_image(options.projection, options.lens, in.width, in.height, d, x, y)) continue;
-            double v[3];
-            bilinear(in, x, y, v);
-            for (int ch = 0; ch < 3; ++ch) acc[ch] += v[ch];
-            wsum += 1.0;
+            if (direction_to_image(options_.projection, options_.lens, in_width_, in_height_, d, x, y)) look_up(x, y);
         }
     }
-    for (int ch = 0; ch < 3; ++ch) dst[ch] = wsum > 0 ? float(acc[ch] / (ss * ss)) : 0.0f;
 }
 
-// Fisheye and mirror ball: resampled to a latitude–longitude grid, in bands
-// of 64 rows (one progress report each).
-void resample_to_latlong(const Image& in, const MapOptions& options, const Progress& progress,
-                         EnvironmentMap& map) {
-    map.full_sphere = options.projection == Projection::mirror_ball;
-    const ResampleGrid grid = resample_grid(in, options, map.full_sphere);
-    const int w = grid.width, h = grid.height;
-    map.width = w;
-    map.height = h;
-    map.rgb.assign(std::size_t(w) * h * 3, 0.0f);
+BandResampler::BandResampler(const MapOptions& options, int in_width, int in_height, int band_rows)
+    : options_(options), in_width_(in_width), in_height_(in_height) {
+    if (is_latlong(options.projection)) throw ArgumentError("BandResampler is for fisheye and mirror-ball input");
+    if (in_width < 1 || in_height < 1) throw ArgumentError("the environment image is empty");
+    check_map_options(options);
+    band_rows_ = std::clamp(band_rows, 1, in_height);
+    band_count_ = (in_height + band_rows_ - 1) / band_rows_;
+    map_.full_sphere = options.projection == Projection::mirror_ball;
+    const ResampleGrid grid = resample_grid(in_width, in_height, options, map_.full_sphere);
+    map_.width = grid.width;
+    map_.height = grid.height;
+    supersampling_ = grid.supersampling;
+    map_.rgb.assign(std::size_t(map_.width) * map_.height * 3, 0.0f);
+    // sin and cos of every look-up's θ (per output row) and φ (per output
+    // column): the same values direction_of_angles computes, once each.
+    const int ss = supersampling_;
+    sub_row_sin_.resize(std::size_t(map_.height) * ss);
+    sub_row_cos_.resize(sub_row_sin_.size());
+    for (int r = 0; r < map_.height; ++r) {
+        const double t0 = latlong::theta_of_y(r, map_.height, map_.theta_max());
+        const double t1 = latlong::theta_of_y(r + 1, map_.height, map_.theta_max());
+        for (int j = 0; j < ss; ++j) {
+            // Sub-rows equally spaced in cos θ, so each look-up stands for
+            // the same solid angle.
+            const double z = std::cos(t0) + (std::cos(t1) - std::cos(t0)) * (j + 0.5) / ss;
+            const double theta = std::acos(std::clamp(z, -1.0, 1.0));
+            sub_row_sin_[std::size_t(r) * ss + j] = std::sin(theta);
+            sub_row_cos_[std::size_t(r) * ss + j] = std::cos(theta);
+        }
+    }
+    sub_column_sin_.resize(std::size_t(map_.width) * ss);
+    sub_column_cos_.resize(sub_column_sin_.size());
+    for (int c = 0; c < map_.width; ++c)
+        for (int i = 0; i < ss; ++i) {
+            const double phi = latlong::phi_of_x(c + (i + 0.5) / ss, map_.width);
+            sub_column_sin_[std::size_t(c) * ss + i] = std::sin(phi);
+            sub_column_cos_[std::size_t(c) * ss + i] = std::cos(phi);
+        }
+    if (band_count_ == 1) return;
+
+    // Index: per cell the first and last band its look-ups start in, then
+    // per band the cells (a cell near a mirror ball's rim can span many).
+    const std::size_t cells = std::size_t(map_.width) * map_.height;
+    if (cells > std::numeric_limits<std::uint32_t>::max())
+        throw ArgumentError("the working grid is too large to stream; set max_width");
+    std::vector<int> lo(cells), hi(cells);
+    parallel_for(std::size_t(map_.height), {options_.threads, 1, "lights.map_resample_index"},
+                 [&](std::size_t b, std::size_t e) {
+        for (int r = int(b); r < int(e); ++r)
+            for (int c = 0; c < map_.width; ++c) {
+                const std::size_t cell = std::size_t(r) * map_.width + c;
+                int first = band_count_, last = -1;
+                for_each_look_up(r, c, [&](double, double y) {
+                    const int band = lookup_top_row(y, in_height_) / band_rows_;
+                    first = std::min(first, band);
+                    last = std::max(last, band);
+                });
+                lo[cell] = first;
+                hi[cell] = last;
+            }
+    });
+    band_offsets_.assign(std::size_t(band_count_) + 1, 0);
+    for (std::size_t cell = 0; cell < cells; ++cell)
+        for (int band = lo[cell]; band <= hi[cell]; ++band) ++band_offsets_[band + 1];
+    for (int band = 0; band < band_count_; ++band) band_offsets_[band + 1] += band_offsets_[band];
+    band_cells_.resize(band_offsets_.back());
+    std::vector<std::size_t> next(band_offsets_.begin(), band_offsets_.end() - 1);
+    for (std::size_t cell = 0; cell < cells; ++cell)
+        for (int band = lo[cell]; band <= hi[cell]; ++band) band_cells_[next[band]++] = std::uint32_t(cell);
+    sum_.assign(cells * 3, 0.0);
+}
+
+int BandResampler::end_row(int band) const { return std::min(in_height_, (band + 1) * band_rows_ + 1); }
+
+void BandResampler::add_cells(const std::uint32_t* cells, std::size_t count, const float* rows, int first,
+                              int end) {
+    // Look-ups starting in rows [first, end) (this band's own rows).
+    parallel_for(count, {options_.threads, 256, "lights.map_resample"}, [&](std::size_t b, std::size_t e) {
+        for (std::size_t k = b; k < e; ++k) {
+            const std::uint32_t cell = cells[k];
+            const int r = int(cell / std::uint32_t(map_.width)), c = int(cell % std::uint32_t(map_.width));
+            double acc[3] = {0, 0, 0};
+            for_each_look_up(r, c, [&](double x, double y) {
+                const int top = lookup_top_row(y, in_height_);
+                if (top < first || top >= end) return;
+                double v[3];
+                bilinear(rows, first, in_width_, in_height_, x, y, v);
+                for (int ch = 0; ch < 3; ++ch) acc[ch] += v[ch];
+            });
+            for (int ch = 0; ch < 3; ++ch) sum_[std::size_t(cell) * 3 + ch] += acc[ch];
+        }
+    });
+}
+
+void BandResampler::add_band(int band, const float* rows, const Progress& progress) {
+    if (band < 0 || band >= band_count_) throw ArgumentError("band " + std::to_string(band) + " is out of range");
+    const int w = map_.width, h = map_.height;
+    const double n = double(supersampling_) * supersampling_;
+    if (band_count_ > 1) {
+        const std::size_t begin = band_offsets_[band], end = band_offsets_[band + 1];
+        add_cells(band_cells_.data() + begin, end - begin, rows, first_row(band), first_row(band) + band_rows_);
+        return;
+    }
+    // The whole image: each cell's mean straight into the map, in bands of
+    // 64 output rows (one progress report each).
     for (int R0 = 0; R0 < h; R0 += 64) {
         progress.report(double(R0) / h);
-        parallel_for(std::size_t(std::min(64, h - R0)), {options.threads, 1, "lights.map_resample"},
+        parallel_for(std::size_t(std::min(64, h - R0)), {options_.threads, 1, "lights.map_resample"},
                      [&](std::size_t b, std::size_t e) {
             for (int r = R0 + int(b); r < R0 + int(e); ++r)
-                for (int c = 0; c < w; ++c)
-                    resample_cell(in, options, map, grid.supersampling, r, c,
-                                  map.rgb.data() + (std::size_t(r) * w + c) * 3);
+                for (int c = 0; c < w; ++c) {
+                    double acc[3] = {0, 0, 0};
+                    for_each_look_up(r, c, [&](double x, double y) {
+                        double v[3];
+                        bilinear(rows, 0, in_width_, in_height_, x, y, v);
+                        for (int ch = 0; ch < 3; ++ch) acc[ch] += v[ch];
+                    });
+                    float* dst = map_.rgb.data() + (std::size_t(r) * w + c) * 3;
+                    for (int ch = 0; ch < 3; ++ch) dst[ch] = float(acc[ch] / n);
+                }
         });
     }
 }
 
-}  // namespace
+EnvironmentMap BandResampler::finish() {
+    const double n = double(supersampling_) * supersampling_;
+    if (band_count_ > 1)
+        for (std::size_t i = 0; i < sum_.size(); ++i) map_.rgb[i] = float(sum_[i] / n);
+    sum_ = {};
+    sub_row_sin_ = sub_row_cos_ = sub_column_sin_ = sub_column_cos_ = {};
+    band_cells_ = {};
+    band_offsets_ = {};
+    return std::move(map_);
+}
+
+std::size_t BandResampler::buffer_bytes() const {
+    return band_offsets_.capacity() * sizeof(std::size_t) + band_cells_.capacity() * sizeof(std::uint32_t) +
+           (sum_.capacity() + sub_row_sin_.capacity() + sub_row_cos_.capacity() + sub_column_sin_.capacity() +
+            sub_column_cos_.capacity()) * sizeof(double);
+}
 
 EnvironmentMap make_environment(const Image& radiance, const MapOptions& options, const Progress& progress) {
     check_map_input(radiance, options);
@@ -254,11 +372,16 @@ EnvironmentMap make_environment(const Image& radiance, const MapOptions& options
     EnvironmentMap map;
     map.defects = sanitize(in, true);
     map.source_integral_luminance = input_integral_luminance(in, options);
-    if (is_latlong(options.projection))
+    if (is_latlong(options.projection)) {
         reduce_latlong(in, options, progress, map);
-    else
-        resample_to_latlong(in, options, progress, map);
-    return map;
+        return map;
+    }
+    BandResampler resampler(options, in.width, in.height, in.height);
+    resampler.add_band(0, in.pixels.data(), progress);
+    EnvironmentMap resampled = resampler.finish();
+    resampled.defects = map.defects;
+    resampled.source_integral_luminance = map.source_integral_luminance;
+    return resampled;
 }
 
 Eigen::Vector3d integral_rgb(const EnvironmentMap& map) {

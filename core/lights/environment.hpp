@@ -17,6 +17,8 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -92,7 +94,57 @@ struct LatLongSpans {
 void reduce_latlong_rows(const LatLongSpans& spans, const float* band, int band_first_row, int in_width,
                          int row_begin, int row_end, EnvironmentMap& out, int threads);
 
-// Σ Y·Ω over one RGB input row of a lat-long image (for source_integral_luminance).
-double latlong_row_luminance(Projection projection, int in_width, int in_height, int row, const float* rgb);
+// Σ Y·Ω over one RGB input row, each pixel with its own projection's solid
+// angle (for source_integral_luminance).
+double input_row_luminance(const MapOptions& options, int in_width, int in_height, int row, const float* rgb);
+
+// Throws ArgumentError for a bad max_width, supersampling or fisheye lens.
+void check_map_options(const MapOptions& options);
+
+// Building blocks of the fisheye and mirror-ball resampling, shared by
+// make_environment (the whole image is one band) and read_environment
+// (lights/map_reader.hpp, band by band from the file).
+//
+// Output cell (r, c) is the mean of ss² bilinear look-ups spread evenly over
+// its solid angle. A look-up reads input rows y0 and y0 + 1 and is taken
+// while the band that holds y0 is in memory, so the file is read once, top
+// to bottom, whatever the projection's random access. Before the first band
+// one pass over the look-ups' positions (no pixels) lists, per band, the
+// cells with a look-up in it. A cell whose look-ups all fall in one band gets
+// exactly its whole-image value; one whose look-ups span bands is summed per
+// band in double, so its float value can differ from the whole image's by
+// the last bit (tested: at most one ulp).
+class BandResampler {
+public:
+    // Bands of `band_rows` input rows; band_rows ≥ in_height: one band, the
+    // whole image, held no index and no partial sums.
+    BandResampler(const MapOptions& options, int in_width, int in_height, int band_rows);
+    int band_count() const { return band_count_; }
+    // Band k needs input rows [first_row(k), end_row(k)): its own rows and
+    // the row after them (the bilinear look-ups' lower row).
+    int first_row(int band) const { return band * band_rows_; }
+    int end_row(int band) const;
+    // Takes band k's look-ups from `rows`, RGB input rows [first_row(k),
+    // end_row(k)). One band: progress per 64 output rows.
+    void add_band(int band, const float* rows, const Progress& progress = {});
+    // The working map once every band is in (defects and the source
+    // integral are the caller's to fill).
+    EnvironmentMap finish();
+    // Bytes of the band index and partial sums (excluding the working map).
+    std::size_t buffer_bytes() const;
+
+private:
+    template <class LookUp>
+    void for_each_look_up(int row, int column, LookUp&& look_up) const;
+    void add_cells(const std::uint32_t* cells, std::size_t count, const float* rows, int first, int end);
+    MapOptions options_;
+    int in_width_, in_height_, band_rows_, band_count_, supersampling_;
+    EnvironmentMap map_;
+    std::vector<double> sub_row_sin_, sub_row_cos_;        // sin θ, cos θ of the look-ups, per (row, sub-row)
+    std::vector<double> sub_column_sin_, sub_column_cos_;  // sin φ, cos φ, per (column, sub-column)
+    std::vector<std::size_t> band_offsets_;  // per band, its range of band_cells_
+    std::vector<std::uint32_t> band_cells_;  // cells (r·width + c) with a look-up in the band
+    std::vector<double> sum_;                // per cell, RGB partial sums (several bands only)
+};
 
 }  // namespace penumbra::lights

@@ -56,98 +56,161 @@ EnvironmentMap read_whole(const std::string& path, const ColorConfig* config, co
     return make_environment(image, options, progress);
 }
 
-}  // namespace
-
-bool streams(const MapOptions& options, int width, int height) {
-    return is_latlong(options.projection) && options.max_width > 0 && width > options.max_width && height > 0;
-}
-
-EnvironmentMap read_environment(const std::string& path, const ColorConfig* config, const std::string& colorspace,
-                                const MapOptions& options, const Progress& progress, std::size_t band_bytes,
-                                ReadReport* report) {
-    if (options.max_width < 0 || (options.max_width > 0 && options.max_width < 4))
-        throw ArgumentError("max_width must be 0 (no limit) or at least 4, got " + std::to_string(options.max_width));
-    const ImageInfo info = read_image_info(path);  // clear errors for missing, empty or unreadable files
-    if (!streams(options, info.width, info.height)) {
-        EnvironmentMap map = read_whole(path, config, colorspace, options, progress);
-        if (report) *report = ReadReport{false, 1, std::size_t(info.width) * info.height * 3 * sizeof(float)};
-        return map;
+// An image file's rows, read top to bottom as scene-linear RGB: each row is
+// picked to R, G, B, converted, sanitized (counted in `defects`) and added to
+// `integral` (Σ Y·Ω with the projection's own Jacobian) once, when it is
+// read, exactly as make_environment treats the whole image.
+class RowStream {
+public:
+    RowStream(const std::string& path, const ColorConfig* config, const std::string& colorspace,
+              const MapOptions& options)
+        : path_(path), config_(config), colorspace_(colorspace), options_(options) {
+        in_ = OIIO::ImageInput::open(path);
+        if (!in_) throw IoError("cannot read '" + path + "' as an image: " + OIIO::geterror());
+        spec_ = in_->spec();
+        pick_ = rgb_channels(spec_);
+        ch_begin_ = *std::min_element(pick_.begin(), pick_.end());
+        ch_end_ = *std::max_element(pick_.begin(), pick_.end()) + 1;
     }
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw IoError("cannot read '" + path + "' as an image: " + OIIO::geterror());
-    const OIIO::ImageSpec spec = in->spec();
-    const int W = spec.width, H = spec.height;
-    const auto pick = rgb_channels(spec);
-    const int ch_begin = *std::min_element(pick.begin(), pick.end());
-    const int ch_end = *std::max_element(pick.begin(), pick.end()) + 1;
-    const int nch = ch_end - ch_begin;
+    int width() const { return spec_.width; }
+    int height() const { return spec_.height; }
 
+    // Holds input rows [first, end) at rows(): keeps those already held,
+    // reads the rest. Neither bound may move back, and `first` may not pass
+    // the rows read so far (each row is read, counted and integrated once).
+    void hold(int first, int end) {
+        const int W = width();
+        if (first < first_ || end < end_ || first > end_ || first > end)
+            throw Error("internal: rows [" + std::to_string(first) + ", " + std::to_string(end) + ") after [" +
+                        std::to_string(first_) + ", " + std::to_string(end_) + ") of '" + path_ + "'");
+        const std::size_t row_floats = std::size_t(W) * 3;
+        const int kept = end_ - first;
+        if (kept > 0 && first > first_)
+            std::memmove(band_.data(), band_.data() + std::size_t(first - first_) * row_floats,
+                         std::size_t(kept) * row_floats * sizeof(float));
+        band_.resize(std::size_t(end - first) * row_floats);
+        if (end > end_) read(end_, end, band_.data() + std::size_t(kept) * row_floats);
+        first_ = first;
+        end_ = end;
+    }
+    const float* rows() const { return band_.data(); }
+    PixelDefects defects;
+    double integral = 0.0;
+    // The pixel buffers held now: the rows, the file's rows and one converted copy.
+    std::size_t buffer_bytes() const {
+        return (band_.capacity() + raw_.capacity() + fresh_.pixels.capacity() + tiles_.capacity()) * sizeof(float);
+    }
+
+private:
+    // Rows [y0, y1) of the file into `out` (RGB), converted and sanitized.
+    void read(int y0, int y1, float* out) {
+        const int W = width(), n = y1 - y0, nch = ch_end_ - ch_begin_;
+        raw_.resize(std::size_t(n) * W * nch);
+        if (!read_rows(*in_, spec_, y0, y1, ch_begin_, ch_end_, raw_.data(), tiles_))
+            throw IoError("cannot read rows " + std::to_string(y0) + ".." + std::to_string(y1 - 1) + " of '" + path_ +
+                          "': " + in_->geterror() + "; the file may be truncated or corrupt, re-export it");
+        fresh_ = Image(W, n, 3);
+        const std::size_t pixels = std::size_t(W) * n;
+        for (std::size_t p = 0; p < pixels; ++p)
+            for (int c = 0; c < 3; ++c) fresh_.pixels[p * 3 + c] = raw_[p * nch + pick_[c] - ch_begin_];
+        if (config_) config_->to_scene_linear(fresh_, colorspace_);
+        const PixelDefects d = sanitize(fresh_, true);
+        defects.nan += d.nan;
+        defects.inf += d.inf;
+        defects.negative += d.negative;
+        for (int r = 0; r < n; ++r) integral += input_row_luminance(options_, W, height(), y0 + r, fresh_.row(r));
+        std::memcpy(out, fresh_.pixels.data(), fresh_.pixels.size() * sizeof(float));
+    }
+
+    std::string path_;
+    const ColorConfig* config_;
+    std::string colorspace_;
+    MapOptions options_;
+    std::unique_ptr<OIIO::ImageInput> in_;
+    OIIO::ImageSpec spec_;
+    std::array<int, 3> pick_{};
+    int ch_begin_ = 0, ch_end_ = 0;
+    std::vector<float> band_, raw_, tiles_;  // held rows (scene-linear RGB); the file's rows being read
+    Image fresh_;
+    int first_ = 0, end_ = 0;  // rows held: [first_, end_)
+};
+
+// Lat-long input: reduced output band by output band (as many output rows
+// as fit `band_bytes` of input rows, at least one, at most 64, the
+// whole-image path's band), keeping the input rows neighbouring bands share.
+EnvironmentMap stream_latlong(RowStream& stream, const MapOptions& options, const Progress& progress,
+                              std::size_t band_bytes, ReadReport& report) {
+    const int W = stream.width(), H = stream.height();
     EnvironmentMap map;
     map.full_sphere = options.projection == Projection::equirectangular;
     map.width = options.max_width;
     map.height = std::max(1, int(std::lround(double(H) * map.width / W)));
     map.rgb.assign(std::size_t(map.width) * map.height * 3, 0.0f);
     const LatLongSpans spans(W, H, map.width, map.height, map.theta_max());
-
-    // Output rows per band: as many as fit `band_bytes` of input rows (at
-    // least one, at most 64, the whole-image path's band).
     std::size_t rows_per_output = 1;
     for (const auto& r : spans.rows) rows_per_output = std::max(rows_per_output, r.weight.size());
     const std::size_t row_bytes = std::size_t(W) * 3 * sizeof(float);
     const int per_band = int(std::clamp<std::size_t>(band_bytes / (rows_per_output * row_bytes), 1, 64));
-
-    std::vector<float> band, raw, tiles;  // held input rows (scene-linear RGB); the file's rows being read
-    int band_first = 0, band_end = 0;
-    Image fresh;
-    double integral = 0.0;
-    ReadReport rep;
-    rep.streamed = true;
     for (int R0 = 0; R0 < map.height; R0 += per_band) {
         progress.report(double(R0) / map.height);
         const int R1 = std::min(map.height, R0 + per_band);
         const int need_first = spans.rows[R0].first;
         const int need_end = spans.rows[R1 - 1].first + int(spans.rows[R1 - 1].weight.size());
-        // Keep the rows the previous band shares with this one.
-        const int keep_from = std::max(need_first, band_first);
-        const int kept = std::max(0, band_end - keep_from);
-        if (kept > 0 && keep_from > band_first)
-            std::memmove(band.data(), band.data() + std::size_t(keep_from - band_first) * W * 3,
-                         std::size_t(kept) * row_bytes);
-        band_first = need_first;
-        const int read_first = need_first + kept, n = need_end - read_first;
-        band.resize(std::size_t(need_end - need_first) * W * 3);
-        if (n > 0) {
-            raw.resize(std::size_t(n) * W * nch);
-            if (!read_rows(*in, spec, read_first, need_end, ch_begin, ch_end, raw.data(), tiles))
-                throw IoError("cannot read rows " + std::to_string(read_first) + ".." + std::to_string(need_end - 1) +
-                              " of '" + path + "': " + in->geterror() +
-                              "; the file may be truncated or corrupt, re-export it");
-            fresh = Image(W, n, 3);
-            const std::size_t pixels = std::size_t(W) * n;
-            for (std::size_t p = 0; p < pixels; ++p)
-                for (int c = 0; c < 3; ++c) fresh.pixels[p * 3 + c] = raw[p * nch + pick[c] - ch_begin];
-            if (config) config->to_scene_linear(fresh, colorspace);
-            const PixelDefects d = sanitize(fresh, true);
-            map.defects.nan += d.nan;
-            map.defects.inf += d.inf;
-            map.defects.negative += d.negative;
-            for (int r = 0; r < n; ++r)
-                integral += latlong_row_luminance(options.projection, W, H, read_first + r, fresh.row(r));
-            std::memcpy(band.data() + std::size_t(kept) * W * 3, fresh.pixels.data(), fresh.pixels.size() * sizeof(float));
-        }
-        band_end = need_end;
-        rep.buffer_bytes = std::max(rep.buffer_bytes, (band.capacity() + raw.capacity() + fresh.pixels.capacity() +
-                                                        tiles.capacity()) *
-                                                          sizeof(float));
-        ++rep.bands;
-        reduce_latlong_rows(spans, band.data(), band_first, W, R0, R1, map, options.threads);
+        stream.hold(need_first, need_end);
+        report.buffer_bytes = std::max(report.buffer_bytes, stream.buffer_bytes());
+        ++report.bands;
+        reduce_latlong_rows(spans, stream.rows(), need_first, W, R0, R1, map, options.threads);
     }
-    map.source_integral_luminance = integral;
+    return map;
+}
+
+// Fisheye and mirror ball: bands of as many input rows as fit `band_bytes`,
+// each handing its look-ups to the resampler (environment.hpp).
+EnvironmentMap stream_resampled(RowStream& stream, const MapOptions& options, const Progress& progress,
+                                std::size_t band_bytes, ReadReport& report) {
+    const int W = stream.width(), H = stream.height();
+    const std::size_t row_bytes = std::size_t(W) * 3 * sizeof(float);
+    const int band_rows = int(std::clamp<std::size_t>(band_bytes / row_bytes, 1, std::size_t(H)));
+    BandResampler resampler(options, W, H, band_rows);
+    for (int band = 0; band < resampler.band_count(); ++band) {
+        progress.report(double(band) / resampler.band_count());
+        stream.hold(resampler.first_row(band), resampler.end_row(band));
+        report.buffer_bytes = std::max(report.buffer_bytes, stream.buffer_bytes() + resampler.buffer_bytes());
+        ++report.bands;
+        resampler.add_band(band, stream.rows());
+    }
+    return resampler.finish();
+}
+
+}  // namespace
+
+bool streams(const MapOptions& options, int width, int height) {
+    return options.max_width > 0 && width > options.max_width && height > 0;
+}
+
+EnvironmentMap read_environment(const std::string& path, const ColorConfig* config, const std::string& colorspace,
+                                const MapOptions& options, const Progress& progress, std::size_t band_bytes,
+                                ReadReport* report) {
+    check_map_options(options);
+    const ImageInfo info = read_image_info(path);  // clear errors for missing, empty or unreadable files
+    if (!streams(options, info.width, info.height)) {
+        EnvironmentMap map = read_whole(path, config, colorspace, options, progress);
+        if (report) *report = ReadReport{false, 1, std::size_t(info.width) * info.height * 3 * sizeof(float)};
+        return map;
+    }
+    RowStream stream(path, config, colorspace, options);
+    ReadReport rep;
+    rep.streamed = true;
+    EnvironmentMap map = is_latlong(options.projection) ? stream_latlong(stream, options, progress, band_bytes, rep)
+                                                        : stream_resampled(stream, options, progress, band_bytes, rep);
+    map.defects = stream.defects;
+    map.source_integral_luminance = stream.integral;
     if (report) *report = rep;
     return map;
 }
 
-LightSource::LightSource(const std::string& path, FrameSourceKind kind) : frames_(open_frames(path, kind)) {
+LightSource::LightSource(const std::string& path, FrameSourceKind kind, std::size_t band_bytes)
+    : frames_(open_frames(path, kind)), band_bytes_(band_bytes) {
     if (kind == FrameSourceKind::video || (kind == FrameSourceKind::automatic && is_video_file(path))) return;
     if (frames_->frame_count() == 1) {
         files_ = {path};
@@ -174,7 +237,7 @@ EnvironmentMap LightSource::read_map(int index, const ColorConfig* config, const
         throw IoError("frame '" + file + "' is " + std::to_string(info.width) + "x" + std::to_string(info.height) +
                       " but the first frame is " + std::to_string(frames_->width()) + "x" +
                       std::to_string(frames_->height()) + "; every frame of a sequence or video must have the same size");
-    return read_environment(file, config, colorspace, options, progress, std::size_t(16) << 20, report);
+    return read_environment(file, config, colorspace, options, progress, band_bytes_, report);
 }
 
 }  // namespace penumbra::lights
