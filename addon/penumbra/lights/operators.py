@@ -23,6 +23,14 @@ PREVIEW_NAME = "Penumbra Light Rig Preview"
 _SETTING_NAMES = ("filepath", "mapping", "colorspace", "count", "sampler", "power", "blue_noise",
                   "temporal_filter", "cluster_max", "adaptive_tolerance", "frame_start", "frame_end",
                   "limit_shadows", "json_path")
+# The builds running modally from the UI: the header text shows each one's
+# frames, and so can a script or a test between two timer ticks.
+_running_jobs = []
+
+
+def running_builds():
+    """(frames done, frames in all) of each light rig being built from the UI."""
+    return [(job.done, job.frames) for job in _running_jobs]
 
 # The widest grid the World's light is summed on when it is more than one
 # rotated image: the core's working map is no wider (MapOptions::max_width's
@@ -308,14 +316,23 @@ class PENUMBRA_OT_build_light_rig(bpy.types.Operator):
         wm.progress_begin(0, self._job.frames)
         self._timer = wm.event_timer_add(0.01, window=context.window)
         wm.modal_handler_add(self)
+        _running_jobs.append(self._job)
         return {"RUNNING_MODAL"}
 
     def _stop(self, context):
         wm = context.window_manager
         wm.event_timer_remove(self._timer)
         wm.progress_end()
+        if self._job in _running_jobs:
+            _running_jobs.remove(self._job)
         if context.area:
             context.area.header_text_set(None)
+
+    def cancel(self, context):
+        # Blender ends a modal operator this way when the file is closed or
+        # another one loaded: nothing was written yet, only the timer and
+        # the progress display are left to remove.
+        self._stop(context)
 
     def modal(self, context, event):
         if event.type == "ESC":
