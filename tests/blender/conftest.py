@@ -1,6 +1,7 @@
 """Runs inside a real Blender: Debian's `blender` 3.4 (through
-pytest_in_blender.py) or the bpy 4.5 module from .venv (plain pytest).
-Puts build/addon on sys.path, as a batch script would."""
+pytest_in_blender.py, in the background or in a window under Xvfb) or the
+bpy 4.5 / 5.2 modules (plain pytest). Puts build/addon on sys.path, as a
+batch script would, and picks the test files for the mode (blender_window.py)."""
 
 import os
 import sys
@@ -13,9 +14,22 @@ BUILD_ADDON = os.path.join(ROOT, "build", "addon")
 if BUILD_ADDON not in sys.path:
     sys.path.insert(0, BUILD_ADDON)
 
+import blender_window  # noqa: E402  (tests/blender is on sys.path: pytest's rootdir-relative imports)
+
 
 def pytest_report_header(config):
-    return f"Blender {bpy.app.version_string} ({'bpy module' if bpy.app.binary_path == '' else bpy.app.binary_path})"
+    mode = "window: only *_window.py" if blender_window.windowed() else "background: *_window.py left out"
+    return (f"Blender {bpy.app.version_string} ({'bpy module' if bpy.app.binary_path == '' else bpy.app.binary_path}; "
+            f"{mode})")
+
+
+def pytest_ignore_collect(collection_path, config):
+    """Tests of the window manager (`*_window.py`, see blender_window.py) run
+    only in a windowed Blender, every other test only in a background one."""
+    name = collection_path.name
+    if collection_path.is_file() and name.startswith("test_") and name.endswith(".py"):
+        return name.endswith("_window.py") != blender_window.windowed()
+    return None
 
 
 @pytest.fixture
