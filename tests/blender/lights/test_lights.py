@@ -190,6 +190,28 @@ def test_sequence_gives_linear_keyframes_without_flips(addon, tmp_path):
     assert [f["frame"] for f in doc["frames"]] == [10, 11, 12, 13, 14, 15]
 
 
+def test_invoke_without_an_event_loop_builds_the_rig_at_once(addon, tmp_path):
+    """`blender -b` and the bpy modules have no event loop: Blender runs
+    INVOKE_DEFAULT as execute, so a script that asks for the Build button's
+    path gets its rig at once instead of a modal build that would never get
+    a timer tick (the modal path itself: test_light_rig_window.py)."""
+    from penumbra.lights import operators
+    scene = addon
+    core = _core()
+    folder = tmp_path / "seq"
+    folder.mkdir()
+    for i in range(3):
+        core.image.write_exr(str(folder / f"sky_{i + 1:04d}.exr"),
+                             core.lights.rotate_map_z(_sky_and_sun(h=16, w=32), math.radians(10 * i)),
+                             half=False, colorspace="Linear")
+    assert bpy.ops.penumbra.build_light_rig("INVOKE_DEFAULT", filepath=str(folder / "sky_0001.exr"), count=4,
+                                            frame_end=3, json_path=str(tmp_path / "i.json")) == {"FINISHED"}
+    assert operators.running_builds() == []
+    suns = [o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"]
+    assert len(suns) == 4
+    assert len(json.load(open(tmp_path / "i.json"))["frames"]) == 3
+
+
 def test_bad_input_reports_and_changes_nothing(addon, tmp_path):
     path = _write_map(str(tmp_path / "map.exr"), _sky_and_sun())
     for kwargs, words in (({"filepath": path, "colorspace": "No Such Space"}, "colour space"),
