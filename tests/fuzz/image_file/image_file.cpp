@@ -1,7 +1,8 @@
 // Fuzz harness: opening an image file through our wrappers of OpenImageIO,
 // core/image/image_io.cpp (read_image_info, read_image of every frame) and
 // the light rig's streaming reader core/lights/map_reader.cpp
-// (read_environment, band by band through read_scanlines / read_tiles).
+// (read_environment, band by band through read_scanlines / read_tiles, in
+// every projection).
 //
 // Input: the file's bytes (the corpus holds real EXR, HDR, PNG, TIFF, JPEG
 // files). The file is named with the extension its first bytes announce, as
@@ -52,8 +53,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                                 "read_image returned an image whose size does not match its pixels");
         });
     }
-    // Streamed when wider than max_width; tiny bands so the band logic turns over.
-    for (auto projection : {lights::Projection::equirectangular, lights::Projection::hemisphere_polar}) {
+    // Streamed when wider than max_width; tiny bands so the band logic turns
+    // over (lat-long: reduced per band; fisheye, mirror ball: look-ups per band).
+    for (auto projection : {lights::Projection::equirectangular, lights::Projection::hemisphere_polar,
+                            lights::Projection::fisheye, lights::Projection::mirror_ball}) {
         lights::MapOptions options;
         options.projection = projection;
         options.max_width = 4;
