@@ -37,13 +37,15 @@ MICROSURFACE_TABLE_SIZE = 256
 # bounded there instead of infinite.
 HORIZON_REACH = 20.0
 # Bumped whenever the Noise Filter's nodes change, so a re-bake in a .blend
-# saved by an older version builds the group anew (2: Closest texel fetches).
-NOISE_FILTER_VERSION = 2
+# saved by an older version builds the group anew (2: Closest texel fetches;
+# 3: taps outermost, within Cycles' SVM stack).
+NOISE_FILTER_VERSION = 3
 # Tap positions along the footprint's major axis, in filter standard
 # deviations: the Gaussian's quantiles at (k + 1/2)/8 scaled to unit variance
 # (equal weights); two taps (±1) along the minor axis: 16 taps in all.
 _Q = (-1.5341, -0.8871, -0.4888, -0.1573, 0.1573, 0.4888, 0.8871, 1.5341)
 MAJOR_TAPS = tuple(x / math.sqrt(sum(v * v for v in _Q) / len(_Q)) for x in _Q)
+TAP_COUNT = 2 * len(MAJOR_TAPS)
 
 
 class _Builder:
@@ -54,9 +56,13 @@ class _Builder:
         self.nodes = group.nodes
         self.links = group.links
         self.x = 0
+        self.placed = 0
 
     def _place(self, node):
-        node.location = (self.x, -200 * (len(self.nodes) % 6))
+        # A counter, not len(self.nodes): counting a node collection walks it,
+        # and a Noise Filter has thousands of nodes.
+        self.placed += 1
+        node.location = (self.x, -200 * (self.placed % 6))
         self.x += 60
         return node
 
@@ -428,24 +434,34 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px):
     b = _Builder(group)
     share, centre_weight = _sample_share(b, gin.outputs["Samples"])
     log2_s, v = _footprint_table_coordinates(b, gin, table, filter_stddev_px, share)
-    taps = _pixel_taps(b, gin, filter_stddev_px, share, centre_weight)
-    taps = [noise_model.distorted_vector(b, tap, gin.outputs["Scale"], model, gin.outputs["W"]) for tap in taps]
-    mean, variance, tap_sums = offset, 0.0, [0.0] * len(taps)   # tap_sums: Σ_i c_i g_i (Fac_i(tap) − 0.5)
+    variance, weights = 0.0, []       # weights: c_i g_i, the shrunk octave's weight in the mean
     for i, c in enumerate(coefficients):
-        scale = b.math("MULTIPLY", gin.outputs["Scale"], lacunarity ** i)
-        values = [noise_model.octave_fac(b, tap, scale, model) for tap in taps]
-        q = _octave_fraction(b, octave_image, table, log2_s, v, i * math.log2(lacunarity))
-        g, term = _octave_shrinkage(b, q, len(taps))
-        average = values[0]
-        for value in values[1:]:
-            average = b.math("ADD", average, value)
-        cg = b.math("MULTIPLY", g, c)
-        mean = b.math("MULTIPLY_ADD", b.math("SUBTRACT", b.math("MULTIPLY", average, 1.0 / len(taps)), 0.5), cg,
-                      mean)
-        for t, value in enumerate(values):
-            tap_sums[t] = b.math("MULTIPLY_ADD", b.math("SUBTRACT", value, 0.5), cg, tap_sums[t])
+        q = _octave_fraction(b, octave_image, table, log2_s, v, i * math.log2(lacunarity),
+                             weights[-1] if weights else None)
+        g, term = _octave_shrinkage(b, q, TAP_COUNT)
+        weights.append(b.math("MULTIPLY", g, c))
         variance = b.math("MULTIPLY_ADD", term, table["total_var"] * c * c, variance)
-    variance = b.math("ADD", variance, _tap_spread(b, tap_sums))
+    # Taps outermost, octaves inside, each tap after the previous one
+    # (_zero_after): only the running sums of s_t = Σ_i c_i g_i (Fac_i(tap) −
+    # 0.5) and s_t² stay live; their mean is the filtered mean's noise part
+    # and their spread the taps'.
+    tap_sum, tap_square, s_t = 0.0, 0.0, 0.0
+    offsets, tap_at = _pixel_taps(b, gin, filter_stddev_px, share, centre_weight)
+    for side, t in offsets:
+        tap = noise_model.distorted_vector(b, tap_at(side, t, s_t), gin.outputs["Scale"], model, gin.outputs["W"])
+        s_t = 0.0
+        for i, weight in enumerate(weights):
+            scale = b.math("MULTIPLY", gin.outputs["Scale"], lacunarity ** i)
+            fac = noise_model.octave_fac(b, tap, scale, model)
+            s_t = b.math("MULTIPLY_ADD", b.math("SUBTRACT", fac, 0.5), weight, s_t)
+        tap_sum = b.math("ADD", tap_sum, s_t)
+        tap_square = b.math("MULTIPLY_ADD", s_t, s_t, tap_square)
+    tap_mean = b.math("MULTIPLY", tap_sum, 1.0 / TAP_COUNT)
+    mean = b.math("ADD", tap_mean, offset)
+    # The taps' spread: the local within-pixel variance of the octaves the
+    # mean keeps (exact for a field linear across the pixel).
+    spread = b.math("SUBTRACT", b.math("MULTIPLY", tap_square, 1.0 / TAP_COUNT), b.math("MULTIPLY", tap_mean, tap_mean))
+    variance = b.math("ADD", variance, b.math("MAXIMUM", spread, 0.0))
     b.connect(mean, gout.inputs["Mean"])
     b.links.new(b.math("SQRT", b.math("MAXIMUM", variance, 0.0)), gout.inputs["Sigma"])
     group["penumbra_version"] = NOISE_FILTER_VERSION
@@ -462,11 +478,14 @@ def _sample_share(b, samples):
     return b.math("SQRT", inverse), centre_weight
 
 
-def _octave_fraction(b, octave_image, table, log2_s, v, log2_octave):
-    """q: the fraction of one octave's variance inside the kernel (table)."""
+def _octave_fraction(b, octave_image, table, log2_s, v, log2_octave, after=None):
+    """q: the fraction of one octave's variance inside the kernel (table),
+    looked up after the value `after` (see _zero_after)."""
     logs = table["log2_footprint"]
     u = b.texel(b.math("MULTIPLY_ADD", log2_s, 1.0 / (logs[-1] - logs[0]),
                        (log2_octave - logs[0]) / (logs[-1] - logs[0])), len(logs))
+    if after is not None:
+        u = b.math("ADD", u, _zero_after(b, after))
     q, _, _ = b.separate(b.image(octave_image, u, v)[0])
     return q
 
@@ -530,9 +549,10 @@ def _footprint_principal_axes(b, axis_u, axis_v):
 
 
 def _pixel_taps(b, gin, filter_stddev_px, share, centre_weight):
-    """The 16 tap positions in the noise's coordinates, P + (1 − β)·Centre
-    Offset + τ(n·m + t·M), τ = share·κ: world offsets taken there by the
-    object's inverse transform (directions) and Units per World (lengths)."""
+    """The 16 taps' (n, t) and a function making the tap position in the
+    noise's coordinates, P + (1 − β)·Centre Offset + τ(n·m + t·M), τ = share·κ:
+    world offsets taken there by the object's inverse transform (directions)
+    and Units per World (lengths)."""
     axis_u, axis_v = gin.outputs["Axis U"], gin.outputs["Axis V"]
     ref = b.vmath("ADD", axis_u, axis_v)
     k = b.math("DIVIDE", b.math("MULTIPLY", b.vmath("LENGTH", ref), gin.outputs["Units per World"]),
@@ -543,26 +563,26 @@ def _pixel_taps(b, gin, filter_stddev_px, share, centre_weight):
     kn = b.vscale(_world_to_object(b, minor_axis), tau)
     base = b.vmath("ADD", gin.outputs["Vector"], b.vscale(_world_to_object(b, gin.outputs["Centre Offset"]),
                                                           b.math("MULTIPLY", k, centre_weight)))
-    taps = []
-    for side in (-1.0, 1.0):
-        row = b.vmath("ADD", base, b.vscale(kn, side))
-        for t in MAJOR_TAPS:
-            taps.append(b.vmath("ADD", row, b.vscale(km, t)))
-    return taps
+
+    def tap(side, t, after):
+        """The tap at n = side, t along M, ordered after the value `after`."""
+        offset = b.vmath("ADD", b.vscale(kn, side), b.vscale(km, t))
+        if isinstance(after, bpy.types.NodeSocket):
+            offset = b.vmath("ADD", offset, _zero_after(b, after))   # a float read as (z, z, z)
+        return b.vmath("ADD", base, offset)
+    return [(side, t) for side in (-1.0, 1.0) for t in MAJOR_TAPS], tap
 
 
-def _tap_spread(b, tap_sums):
-    """The spread of the weighted taps, the local within-pixel variance of the
-    octaves the mean keeps (exact for a field linear across the pixel)."""
-    tap_mean = 0.0
-    tap_square = 0.0
-    for value in tap_sums:
-        tap_mean = b.math("ADD", tap_mean, value)
-        tap_square = b.math("MULTIPLY_ADD", value, value, tap_square)
-    tap_mean = b.math("MULTIPLY", tap_mean, 1.0 / len(tap_sums))
-    spread = b.math("SUBTRACT", b.math("MULTIPLY", tap_square, 1.0 / len(tap_sums)),
-                    b.math("MULTIPLY", tap_mean, tap_mean))
-    return b.math("MAXIMUM", spread, 0.0)
+def _zero_after(b, value):
+    """A zero that Cycles can only compute once `value` is: min(|value|, 0)
+    (fminf, so NaN gives 0 too). Cycles' SVM compiler emits, pass after pass,
+    every node whose inputs are ready, so independent work (the 16 taps, the
+    octave table's lookups) is evaluated level by level and all its values
+    held at once on the 255-float SVM stack: 16 taps × 9 octaves, or 5
+    octaves with Distortion, overflowed it and the shader rendered black.
+    Chaining each tap (each lookup) after the previous one keeps one's values
+    live at a time, for any Detail; EEVEE's GLSL does not care."""
+    return b.math("MINIMUM", b.math("ABSOLUTE", value), 0.0)
 
 
 def microsurface_image(folder=None):
