@@ -21,6 +21,7 @@ Settings (environment; defaults are the full sweep of the issue):
   PENUMBRA_BENCH_REF_SPP    Cycles reference samples (4096)
   PENUMBRA_BENCH_SEEDS      number of seeds (4)
   PENUMBRA_BENCH_SCENES     comma-separated subset of SCENES
+  PENUMBRA_BENCH_EEVEE_SCENES  the EEVEE sweep's own subset (default: as above)
   PENUMBRA_BENCH_THREADS    render threads (2)
   PENUMBRA_BENCH_PROBE      1/0: run the timing probe (default: quick mode only)
 
@@ -93,7 +94,9 @@ def config(renderer, quick=None, environment=True):
     base = QUICK if quick else FULL
     cfg = {"renderer": renderer, "quick": quick, "scale": float(env.get("PENUMBRA_BENCH_SCALE", base["scale"])),
            "seeds": int(env.get("PENUMBRA_BENCH_SEEDS", base["seeds"])),
-           "scenes": [s for s in env.get("PENUMBRA_BENCH_SCENES", ",".join(base["scenes"])).split(",") if s],
+           "scenes": [s for s in env.get(("PENUMBRA_BENCH_EEVEE_SCENES" if renderer == "eevee" and
+                                           "PENUMBRA_BENCH_EEVEE_SCENES" in env else "PENUMBRA_BENCH_SCENES"),
+                                          ",".join(base["scenes"])).split(",") if s],
            "threads": int(env.get("PENUMBRA_BENCH_THREADS", "2")),
            "probe": env.get("PENUMBRA_BENCH_PROBE", "1" if quick else "0") not in ("", "0")}
     cfg.update(base[renderer])
