@@ -121,10 +121,11 @@ class _Builder:
         self.links.new(self.combine(u, v), node.inputs["Vector"])
         return node
 
-    def image(self, image, u, v):
+    def image(self, image, u, v, alpha=True):
         """(Color, Alpha) of `image` at (u, v) in [0, 1]², bilinear between
         the four nearest texel centres, fetched as Closest so that no
-        renderer's mipmapping takes part (see texel_fetch)."""
+        renderer's mipmapping takes part (see texel_fetch). alpha=False: the
+        tables that keep nothing there get no nodes for it (Alpha is None)."""
         width, height = image.size
 
         def corners(coordinate, count):
@@ -139,8 +140,9 @@ class _Builder:
         for row in (v0, v1):
             left, right = self.texel_fetch(image, u0, row), self.texel_fetch(image, u1, row)
             rows.append((self.lerp_vector(left.outputs["Color"], right.outputs["Color"], fu),
-                         self.lerp(left.outputs["Alpha"], right.outputs["Alpha"], fu)))
-        return self.lerp_vector(rows[0][0], rows[1][0], fv), self.lerp(rows[0][1], rows[1][1], fv)
+                         self.lerp(left.outputs["Alpha"], right.outputs["Alpha"], fu) if alpha else None))
+        return (self.lerp_vector(rows[0][0], rows[1][0], fv),
+                self.lerp(rows[0][1], rows[1][1], fv) if alpha else None)
 
     def lerp(self, a, b, t):
         return self.math("MULTIPLY_ADD", self.math("SUBTRACT", b, a), t, a)
@@ -486,7 +488,7 @@ def _octave_fraction(b, octave_image, table, log2_s, v, log2_octave, after=None)
                        (log2_octave - logs[0]) / (logs[-1] - logs[0])), len(logs))
     if after is not None:
         u = b.math("ADD", u, _zero_after(b, after))
-    q, _, _ = b.separate(b.image(octave_image, u, v)[0])
+    q, _, _ = b.separate(b.image(octave_image, u, v, alpha=False)[0])
     return q
 
 
@@ -613,7 +615,7 @@ def _table(b, image, x, row):
     """Sample row `row` of the microsurface image at u = x / (1 + x) (x >= 0)."""
     x = b.math("MAXIMUM", x, 0.0)
     u = b.math("DIVIDE", x, b.math("ADD", x, 1.0))
-    return b.separate(b.image(image, b.texel(u, MICROSURFACE_TABLE_SIZE), (row + 0.5) / 2.0)[0])
+    return b.separate(b.image(image, b.texel(u, MICROSURFACE_TABLE_SIZE), (row + 0.5) / 2.0, alpha=False)[0])
 
 
 def _cot_over_sigma(b, cos_theta, sigma):
