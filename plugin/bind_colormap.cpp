@@ -219,9 +219,9 @@ py::array_t<float> evaluate(const py::array& stops, const py::array& positions_a
 
 py::dict ramp_to_knots(const py::array& stops, RampInterpolation interpolation, RampColorMode color_mode,
                        RampHueInterpolation hue_interpolation, RampSampling sampling, int channels,
-                       int dense_samples) {
+                       int dense_samples, int table_size) {
     const ColorRamp ramp = make_ramp(stops, interpolation, color_mode, hue_interpolation);
-    const ColorMap map = ramp_to_color_map(ramp, sampling, channels, dense_samples);
+    const ColorMap map = ramp_to_color_map(ramp, sampling, channels, dense_samples, table_size);
     py::array_t<double> positions(static_cast<py::ssize_t>(map.positions.size()));
     std::copy(map.positions.begin(), map.positions.end(), positions.mutable_data());
     py::array_t<double> colors({static_cast<py::ssize_t>(map.knot_count()), static_cast<py::ssize_t>(map.channels)});
@@ -246,7 +246,9 @@ void bind_ramps(py::module_& m) {
           py::arg("color_mode") = ramp.color_mode, py::arg("hue_interpolation") = ramp.hue_interpolation,
           // What lookups are built from by default: a filtered lookup converges to the plain ramp's render.
           py::arg("sampling") = RampSampling::cycles_table, py::arg("channels") = 4, py::arg("dense_samples") = 1024,
-    "A ColorRamp as colour-map knots: sampling CYCLES (the 256-entry table Cycles renders with) or EXACT "
+          py::arg("table_size") = cycles_3x_ramp_table_size,
+    "A ColorRamp as colour-map knots: sampling CYCLES (the table the renderer renders with: table_size "
+    "entries at i/(table_size - 1); 256 for Cycles in Blender 3.x, 257 for EEVEE and for Cycles 4.5+) or EXACT "
     "(stops themselves where the ramp is piecewise linear/constant, else dense_samples samples). Returns "
     "dict(positions, colors, interpolation (MapInterpolation), max_sampling_error against BKE_colorband_evaluate).");
 }

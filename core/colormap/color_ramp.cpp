@@ -232,12 +232,15 @@ std::array<float, 4> evaluate_ramp(const ColorRamp& ramp, float position) {
     return evaluate_sorted(ramp, sorted_stops(ramp), position);
 }
 
-ColorMap ramp_to_color_map(const ColorRamp& ramp, RampSampling sampling, int channels, int dense_samples) {
+ColorMap ramp_to_color_map(const ColorRamp& ramp, RampSampling sampling, int channels, int dense_samples,
+                           int table_size) {
     validate_ramp(ramp);
     if (channels != 3 && channels != 4)
         throw ArgumentError("a ramp's colour map has 3 (RGB) or 4 (RGBA) channels");
     if (dense_samples < 2)
         throw ArgumentError("dense_samples must be at least 2");
+    if (table_size < 2)
+        throw ArgumentError("a renderer's ramp table has at least 2 entries (Blender uses 256 or 257)");
     const std::vector<RampStop> stops = sorted_stops(ramp);
     std::vector<double> positions, colors;
     auto push = [&](double x, const std::array<float, 4>& c) {
@@ -256,7 +259,7 @@ ColorMap ramp_to_color_map(const ColorRamp& ramp, RampSampling sampling, int cha
     };
 
     if (sampling == RampSampling::cycles_table) {
-        const int n = cycles_ramp_table_size;
+        const int n = table_size;
         for (int i = 0; i < n; ++i) {
             const float x = static_cast<float>(i) / static_cast<float>(n - 1);
             push(static_cast<double>(i) / (n - 1), evaluate_sorted(ramp, stops, x));

@@ -45,9 +45,9 @@ std::array<float, 4> evaluate_ramp(const ColorRamp& ramp, float position);
 void validate_ramp(const ColorRamp& ramp);
 
 enum class RampSampling {
-    // What Cycles renders: 256 table entries, linear between them (the
-    // constant mode: a step per entry). The default for lookups, so a filtered
-    // lookup converges to the plain ramp's converged render.
+    // What the renderer renders: `table_size` entries at i/(table_size - 1),
+    // linear between them (the constant mode: a step per entry). The default
+    // for lookups, so a filtered lookup converges to the plain ramp's render.
     cycles_table,
     // BKE_colorband_evaluate itself: the linear RGB mode and the constant mode
     // are used knot for knot (exact); ease, cardinal, B-spline and HSV/HSL are
@@ -57,14 +57,19 @@ enum class RampSampling {
 };
 
 // The ramp as a ColorMap with `channels` (3: RGB, 4: RGBA) channels.
+// Entries of the table a renderer evaluates a ColorRamp through, as measured
+// (docs/colormap.md, "The ramp the renderer renders"): Cycles in Blender 3.x
+// samples RAMP_TABLE_SIZE = 256 entries at i/255; EEVEE in every version and
+// Cycles in 4.5 and 5.2 use Blender's own colour-band table, 257 entries at
+// i/256. A constant ramp's steps move by up to one entry between the two.
+inline constexpr int cycles_3x_ramp_table_size = 256;
+inline constexpr int colorband_ramp_table_size = 257;
+
 ColorMap ramp_to_color_map(const ColorRamp& ramp, RampSampling sampling, int channels = 4,
-                           int dense_samples = 1024);
+                           int dense_samples = 1024, int table_size = cycles_3x_ramp_table_size);
 
 // Largest |map(x) - evaluate_ramp(x)| over `probes` evenly spaced positions
 // (a measurement of the dense sampling error, for the docs and tests).
 double ramp_sampling_error(const ColorRamp& ramp, const ColorMap& map, int probes = 100003);
-
-// Number of entries in Cycles' ramp table (RAMP_TABLE_SIZE).
-inline constexpr int cycles_ramp_table_size = 256;
 
 }  // namespace penumbra::colormap

@@ -183,6 +183,7 @@ class BakePlan:
         self.node = node
         self.stops = ramp_io.ramp_stops(node)
         self.modes = ramp_io.ramp_modes(node)
+        self.table_size = ramp_io.renderer_table_size(context.scene)
         if not np.isfinite(self.stops).all():
             raise BakeError(f"ColorRamp '{node.name}' has a NaN or infinite colour; fix the stop first")
         self.name = bpy.path.clean_name(f"{self.material.name}_{node.name}")
@@ -231,7 +232,8 @@ class BakePlan:
         if self.image is not None:
             return core.colormap.lut(self.samples, s["width"], s["height"], s["sigma_max"], s["mean_min"],
                                      s["mean_max"], sigma_spacing=s["sigma_spacing"], progress=progress)
-        knots = core.colormap.ramp_to_knots(self.stops, *self.modes, sampling=self.settings.sampling, channels=4)
+        knots = core.colormap.ramp_to_knots(self.stops, *self.modes, sampling=self.settings.sampling, channels=4,
+                                            table_size=self.table_size)
         self.sampling_error = knots["max_sampling_error"]
         return core.colormap.lut_knots(knots["positions"], knots["colors"], knots["interpolation"], s["width"],
                                        s["height"], s["sigma_max"], s["mean_min"], s["mean_max"],

@@ -73,7 +73,7 @@ class PENUMBRA_PT_colormap_range(_SubPanel, bpy.types.Panel):
         column = layout.column(align=True)
         column.prop(s, "mean_min")
         column.prop(s, "mean_max")
-        # "As Cycles Renders" is too long for the value column: label above, menu below.
+        # "As Rendered" is too long for the value column: label above, menu below.
         column = layout.column(align=True)
         column.label(text="Ramp Sampling")
         column.prop(s, "sampling", text="")

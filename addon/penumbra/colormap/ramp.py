@@ -1,6 +1,16 @@
 """Reading a ColorRamp node and finding what drives it (bpy side only)."""
 
+import bpy
 import numpy as np
+
+# Entries of the table a renderer evaluates a ColorRamp through (measured by
+# tests/blender/colormap/test_ramp_table.py): Cycles in Blender 3.x samples
+# 256 at i/255 (RAMP_TABLE_SIZE); EEVEE in every version, and Cycles in 4.5
+# and 5.2, Blender's colour-band table of 257 at i/256. In constant mode the
+# steps sit on those entries, so a lookup built from the wrong table moves
+# every step by up to one entry: a colour bias that no sample count removes.
+CYCLES_3X_TABLE_SIZE = 256
+COLORBAND_TABLE_SIZE = 257
 
 
 def ramp_stops(node):
@@ -11,6 +21,14 @@ def ramp_stops(node):
         stops[i, 0] = e.position
         stops[i, 1:] = tuple(e.color)
     return stops
+
+
+def renderer_table_size(scene):
+    """The ramp table size of the scene's render engine (see above). Cycles
+    4.0-4.4 were not measured; they are taken to be like 4.5."""
+    if scene.render.engine == "CYCLES" and bpy.app.version < (4, 0, 0):
+        return CYCLES_3X_TABLE_SIZE
+    return COLORBAND_TABLE_SIZE
 
 
 def ramp_modes(node):

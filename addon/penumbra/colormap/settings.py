@@ -18,7 +18,9 @@ class ColormapSceneSettings(bpy.types.PropertyGroup):
         default="LINEAR")
     sampling: bpy.props.EnumProperty(
         name="Ramp Sampling",
-        items=[("CYCLES", "As Cycles Renders", "The 256-entry table Cycles renders a ColorRamp with"),
+        items=[("CYCLES", "As Rendered",
+                "The table the scene's render engine evaluates a ColorRamp through (Cycles in 3.x: 256 "
+                "entries; EEVEE, and Cycles from 4.x: 257), so the filter converges to the plain ramp's render"),
                ("EXACT", "Exact", "Blender's own ColorRamp evaluation (stops, or 1024 samples for curved modes)")],
         default="CYCLES")
     sigma_max: bpy.props.FloatProperty(

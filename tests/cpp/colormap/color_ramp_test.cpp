@@ -116,5 +116,21 @@ TEST(ColorRamp, cycles_table_is_256_entries_at_i_over_255) {
               MapInterpolation::constant);
 }
 
+// Blender's colour-band table (EEVEE; Cycles 4.5+): 257 entries at i/256, so
+// a constant ramp's step at 0.47 falls at 121/256, not at 120/255.
+TEST(ColorRamp, colorband_table_is_257_entries_at_i_over_256) {
+    ColorRamp ramp = two_stop_ramp(RampInterpolation::constant);
+    ramp.stops[1].position = 0.47f;
+    const ColorMap map = ramp_to_color_map(ramp, RampSampling::cycles_table, 3, 1024, colorband_ramp_table_size);
+    ASSERT_EQ(map.knot_count(), 257);
+    EXPECT_DOUBLE_EQ(map.positions[128], 0.5);
+    double at_step[3], before_step[3];
+    map.evaluate(121.0 / 256.0, at_step);
+    map.evaluate(120.5 / 256.0, before_step);
+    EXPECT_FLOAT_EQ(static_cast<float>(at_step[0]), ramp.stops[1].color[0]);
+    EXPECT_FLOAT_EQ(static_cast<float>(before_step[0]), ramp.stops[0].color[0]);
+    EXPECT_THROW(ramp_to_color_map(ramp, RampSampling::cycles_table, 3, 1024, 1), ArgumentError);
+}
+
 }  // namespace
 }  // namespace penumbra::colormap
