@@ -544,6 +544,15 @@ class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):
             self.report({"ERROR"}, f"The active node of '{material.name}' is {what}, not a Penumbra Filtered Ramp: "
                                    "click the filtered ramp whose ColorRamp should come back")
             return {"CANCELLED"}
+        from .surface_filter import filters_of   # it imports this module
+        covering = filters_of(tree, group_node)
+        if covering:
+            # The filter reads the lookup through this group: restoring under
+            # it would leave the filter without its inputs and the ramp unlinked.
+            self.report({"ERROR"}, f"'{group_node.name}' is replaced by the surface filter '{covering[0].name}': "
+                                   "remove the filter first (Remove Filter, penumbra.remove_surface_filter); "
+                                   "nothing was changed")
+            return {"CANCELLED"}
         ramp = tree.nodes.get(ramp_name)
         if ramp is None or ramp.bl_idname != "ShaderNodeValToRGB":
             why = "was deleted or renamed" if ramp is None else f"is now a {ramp.bl_label} node"

@@ -346,3 +346,20 @@ def test_panel_buttons_wait_for_a_baked_ramp(addon, tmp_path):
     # Restore ColorRamp on the ramp under the filter would strand the filter: greyed out.
     material.node_tree.nodes.active = ramp
     assert surface_filter.panel_state(bpy.context) == (True, True, True)
+
+
+def test_restore_under_a_surface_filter_is_refused_and_changes_nothing(addon, tmp_path):
+    """Restore ColorRamp on a filtered ramp that a surface filter replaced
+    would unlink the filter's inputs: the panel greys it out, and a script
+    calling it gets a clear error instead."""
+    material, ramp = bake(addon, tmp_path, noise=False)
+    assert bpy.ops.penumbra.add_surface_filter(kind="HEIGHT") == {"FINISHED"}
+    tree = material.node_tree
+    tree.nodes.active = ramp
+    before = snapshot(tree)
+    with pytest.raises(RuntimeError, match="remove the filter first"):
+        bpy.ops.penumbra.restore_color_ramp()
+    assert snapshot(tree) == before
+    assert bpy.ops.penumbra.remove_surface_filter() == {"FINISHED"}
+    tree.nodes.active = ramp
+    assert bpy.ops.penumbra.restore_color_ramp() == {"FINISHED"}
