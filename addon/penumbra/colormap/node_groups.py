@@ -669,11 +669,14 @@ def slope_ramp_group(lookup_image, spec, name=SLOPE_RAMP):
     shifts by σ_s E[z] and narrows to σ_s sd[z] (microsurface.hpp), so
     v ~ N(v0 + k σ_s E[z] cos ψ, (k σ_s)² (1 − (1 − sd²) cos² ψ)), ψ the angle
     between d and Direction projected onto the surface (s · Direction means
-    the slope along that unit tangent)."""
+    the slope along that unit tangent). Value Sigma is the value's own spread
+    over the pixel (the Noise Filter's Sigma), independent of the facets'
+    slopes, so the variances add."""
     group, gin, gout = _new_group(name, [("Value at Zero Slope", "NodeSocketFloat", 0.5),
                                          ("Value per Slope", "NodeSocketFloat", 1.0),
                                          ("Slope Sigma", "NodeSocketFloat", 0.3),
-                                         ("Direction", "NodeSocketVector", (1.0, 0.0, 0.0))],
+                                         ("Direction", "NodeSocketVector", (1.0, 0.0, 0.0)),
+                                         ("Value Sigma", "NodeSocketFloat", 0.0)],
                                   [("Color", "NodeSocketColor"), ("Alpha", "NodeSocketFloat")])
     b = _Builder(group)
     table = microsurface_image()
@@ -693,7 +696,10 @@ def slope_ramp_group(lookup_image, spec, name=SLOPE_RAMP):
     mean = b.math("MULTIPLY_ADD", b.math("MULTIPLY", k_sigma, ez), cos_psi, gin.outputs["Value at Zero Slope"])
     shrink = b.math("MULTIPLY", b.math("SUBTRACT", 1.0, b.math("MULTIPLY", sdz, sdz)),
                     b.math("MULTIPLY", cos_psi, cos_psi))
-    sigma = b.math("MULTIPLY", b.math("ABSOLUTE", k_sigma), b.math("SQRT", b.math("MAXIMUM", b.math("SUBTRACT", 1.0, shrink), 0.0)))
+    slope_variance = b.math("MULTIPLY", b.math("MULTIPLY", k_sigma, k_sigma),
+                            b.math("MAXIMUM", b.math("SUBTRACT", 1.0, shrink), 0.0))
+    sigma = b.math("SQRT", b.math("MULTIPLY_ADD", gin.outputs["Value Sigma"], gin.outputs["Value Sigma"],
+                                  slope_variance))
     color, alpha = b.image(lookup_image, *_lookup_uv(b, mean, sigma, spec))
     b.links.new(color, gout.inputs["Color"])
     b.links.new(alpha, gout.inputs["Alpha"])

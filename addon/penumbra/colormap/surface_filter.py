@@ -59,7 +59,7 @@ from ..errors import CORE_ERRORS, describe
 FILTERS = {
     # kind: (node name and label, what feeds the group from the filtered ramp, its direction input)
     "HEIGHT": ("Penumbra Height Filter", {"Height Mean": "Mean", "Height Sigma": "Sigma"}, "Light Direction"),
-    "SLOPE": ("Penumbra Slope Filter", {"Value at Zero Slope": "Mean"}, "Direction"),
+    "SLOPE": ("Penumbra Slope Filter", {"Value at Zero Slope": "Mean", "Value Sigma": "Sigma"}, "Direction"),
 }
 KIND_KEY = "penumbra_surface_filter"      # on the filter node: its kind
 RAMP_KEY = "penumbra_filtered_ramp"       # on the filter node: the filtered ramp it replaces

@@ -146,10 +146,10 @@ def _render(scene, path):
     return native.require().image.read(str(path))[..., :3].astype(np.float64)
 
 
-def _probe(tree, ramp, mean_shift, sigma_scale=None, sigma=None):
+def _probe(tree, ramp, mean_shift, sigma_scale=None, sigma=None, added_sigma=None):
     """A second node of the filtered ramp's own group at (Mean + mean_shift ·
-    Sigma, sigma_scale · Sigma) (or the constant `sigma`), its Color into the
-    emission."""
+    Sigma, sigma_scale · Sigma) (or the constant `sigma`, or √(added_sigma² +
+    Sigma²)), its Color into the emission."""
     mean, ramp_sigma = ramp.inputs["Mean"].links[0].from_socket, ramp.inputs["Sigma"].links[0].from_socket
     probe = tree.nodes.new("ShaderNodeGroup")
     probe.node_tree = ramp.node_tree
@@ -159,7 +159,17 @@ def _probe(tree, ramp, mean_shift, sigma_scale=None, sigma=None):
     shifted.inputs[1].default_value = mean_shift
     tree.links.new(mean, shifted.inputs[2])
     tree.links.new(shifted.outputs[0], probe.inputs["Mean"])
-    if sigma is None:
+    if added_sigma is not None:
+        square = tree.nodes.new("ShaderNodeMath")
+        square.operation = "MULTIPLY_ADD"
+        tree.links.new(ramp_sigma, square.inputs[0])
+        tree.links.new(ramp_sigma, square.inputs[1])
+        square.inputs[2].default_value = added_sigma * added_sigma
+        root = tree.nodes.new("ShaderNodeMath")
+        root.operation = "SQRT"
+        tree.links.new(square.outputs[0], root.inputs[0])
+        tree.links.new(root.outputs[0], probe.inputs["Sigma"])
+    elif sigma is None:
         scaled = tree.nodes.new("ShaderNodeMath")
         scaled.operation = "MULTIPLY"
         tree.links.new(ramp_sigma, scaled.inputs[0])
@@ -206,16 +216,21 @@ def test_height_filter_renders_the_filtered_ramp_without_slopes_and_the_shifted_
 
 def test_slope_filter_renders_the_ramp_at_the_slope_spread(addon, tmp_path):
     """Sec. 5.2 seen straight down (cot θ_o = ∞: E[z] = 0, sd[z] = 1): the
-    value is N(Mean, (k σ_s)²), whatever the direction."""
+    value is N(Mean, (k σ_s)² + Sigma²), whatever the direction: the slopes'
+    spread plus the noise's own over the pixel (the Noise Filter's Sigma)."""
     material, ramp = bake(addon, tmp_path, emission=True)
     tree = material.node_tree
     plain = _render(addon, tmp_path / "filtered.exr")
     assert bpy.ops.penumbra.add_surface_filter(kind="SLOPE", slope_sigma=0.25, value_per_slope=0.4) == {"FINISHED"}
     slope = _render(addon, tmp_path / "slope.exr")
     _probe(tree, ramp, 0.0, sigma=0.4 * 0.25)
+    slopes_only = _render(addon, tmp_path / "slopes_only.exr")
+    _probe(tree, ramp, 0.0, added_sigma=0.4 * 0.25)
     expected = _render(addon, tmp_path / "expected.exr")
-    print(f"slope filter render: max error {np.abs(slope - expected).max():.1e}")
+    print(f"slope filter render: max error {np.abs(slope - expected).max():.1e}, "
+          f"{np.abs(slope - slopes_only).max():.1e} from the slopes' spread alone")
     assert np.abs(slope - expected).max() < 2e-4
+    assert np.abs(slope - slopes_only).max() > 10 * np.abs(slope - expected).max()  # the noise's σ counts
     assert np.abs(slope - plain).max() > 0.05  # the slope spread is not the footprint's
 
 
