@@ -150,12 +150,7 @@ def evaluated_mesh(obj, depsgraph, with_topology=True, buffers=None):
     """The mesh as modifiers leave it at the current frame, in world space.
     `buffers` (MeshBuffers of this object): reuse its triangles and arrays."""
     evaluated = obj.evaluated_get(depsgraph)
-    # Blender 3.5+ reads the evaluated mesh in place; to_mesh() copies all of
-    # it first (positions, loops, attributes: most of the read at 100k
-    # vertices). 3.4's evaluated mesh reports stale vertex normals, and other
-    # object types have no mesh until to_mesh().
-    direct = obj.type == "MESH" and hasattr(evaluated.data, "vertex_normals")
-    mesh = evaluated.data if direct else evaluated.to_mesh()
+    mesh = evaluated.to_mesh()
     try:
         n = len(mesh.vertices)
         reuse = buffers is not None and buffers.vertex_count == n
@@ -169,8 +164,7 @@ def evaluated_mesh(obj, depsgraph, with_topology=True, buffers=None):
         # The bake needs Blender's own triangles of this pose (the occluding surface).
         tri = buffers.triangles if reuse else mesh_triangles(mesh)
     finally:
-        if not direct:
-            evaluated.to_mesh_clear()
+        evaluated.to_mesh_clear()
     positions, normals = _to_world(evaluated, co, normals, buffers.positions if reuse else None,
                                    buffers.normals if reuse else None)
     return FrameMesh(positions, normals, tri, topology)
