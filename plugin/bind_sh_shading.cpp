@@ -178,6 +178,12 @@ void bind_sh_shading(py::module_& m) {
     "A vertex with a zero/NaN normal, a tangent along its normal, NaN bands, a zero axis with non-zero bands or\n"
     "(phong) a NaN position shades to 0 and is counted; shape, lighting and parameter errors raise ValueError.\n"
     "See docs/sh-engine.md.");
+    m.def("simd_target", &sh::simd_target,
+          "The SIMD target pose shading runs on for this CPU, chosen at run time (Highway's names: AVX3 = AVX-512, "
+          "AVX2, SSE4; SCALAR is the one-lane reference).");
+    m.def("simd_targets", &sh::simd_targets, "Every SIMD target compiled in that this CPU supports, best first.");
+    m.def("force_simd_target", &sh::force_simd_target, py::arg("name"),
+          "Tests and benchmarks: shade on `name` (one of simd_targets()) from now on; '' returns to the CPU's best.");
 }
 
 }  // namespace penumbra::bindings

@@ -12,6 +12,7 @@ DEBIAN_PACKAGES=(
   libembree-dev           # ray casting for the visibility baker (copied into the package)
   libtbb-dev              # oneTBB: Embree's scheduler and the core's one parallel helper
   libeigen3-dev           # linear algebra (header-only)
+  libhwy-dev              # Google Highway: run-time SIMD dispatch of the run-time shading (copied into the package)
   libimath-dev libfmt-dev # headers OpenImageIO's public headers include (header-only use)
   libgtest-dev            # C++ unit tests
   cmake g++ make pkg-config binutils  # the build; readelf checks the packages' dependencies

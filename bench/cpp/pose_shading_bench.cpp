@@ -4,7 +4,7 @@
 // output bytes), so "× stream" says how far above the bandwidth limit the
 // shader is. Also the straightforward per-vertex reference path (full SH
 // rotation of the RGB lighting per vertex), float vs double buffers, and the
-// order. Prints a Markdown table; bench/sh_shading_benchmark.py writes it to
+// order, and each SIMD target the CPU supports against the scalar one. Prints a Markdown table; bench/sh_shading_benchmark.py writes it to
 // docs/sh-shading-benchmark.md. Not a test: `make bench` runs it.
 //
 //   penumbra_pose_shading_bench [--quick]
@@ -199,7 +199,7 @@ int main(int argc, char** argv) {
         const bool phong = model == ShadingModel::phong;
         const auto [shade, streaming] = median_seconds(repeats, [&] { shader.shade(lighting, p, b); },
                                                        [&] { stream(d, phong, threads); });
-        rows.push_back({"batched", n, lobes, order, threads, phong ? "phong" : model == ShadingModel::diffuse ? "diffuse" : "translucent",
+        rows.push_back({"batched " + simd_target(), n, lobes, order, threads, phong ? "phong" : model == ShadingModel::diffuse ? "diffuse" : "translucent",
                         real_name, shade / n * 1e9, streaming / n * 1e9});
     };
 
@@ -216,6 +216,15 @@ int main(int argc, char** argv) {
     }
     for (int order : {2, 3, 5, 6, 8, 10})
         run_case(float{}, "float32", 100000, 2, order, ShadingModel::diffuse, 1);
+
+    // Every SIMD target compiled in (run-time dispatch; the CPU's best is the
+    // default above) on the run time's case, one thread: the gain of each
+    // over the one-lane scalar reference, in the same run.
+    for (const std::string& target : simd_targets()) {
+        force_simd_target(target);
+        run_case(float{}, "float32", 100000, 2, 4, ShadingModel::phong, 1);
+    }
+    force_simd_target("");
 
     // The straightforward path (shade_straightforward), single thread, double.
     {

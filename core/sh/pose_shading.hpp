@@ -53,6 +53,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -161,5 +162,16 @@ private:
     mutable std::mutex cache_mutex_;
     mutable std::map<double, std::shared_ptr<const ZonalOperator>> phong_cache_;
 };
+
+// The hot loop is compiled for several SIMD targets and the best one the CPU
+// supports is chosen at run time (Highway's names: "AVX3" = AVX-512, "AVX2",
+// "SSE4", and "EMU128", the one-lane scalar reference).
+std::string simd_target();
+// Every target compiled in that this CPU supports, best first.
+std::vector<std::string> simd_targets();
+// Tests and benchmarks: run on `name` (one of simd_targets()) from now on;
+// "" returns to the CPU's best. Not thread-safe against concurrent shading.
+// ArgumentError for a name not in simd_targets().
+void force_simd_target(const std::string& name);
 
 }  // namespace penumbra::sh

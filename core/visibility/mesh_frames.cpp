@@ -79,16 +79,51 @@ void vertex_frames(const std::vector<float>& positions, const std::vector<float>
     if (neighbours.size() != n_vertices) throw ArgumentError("one reference neighbour per vertex is needed");
     check_triangles(n_vertices, triangles);
     FrameStats local;
-    // Repair normals that Blender reports as zero (isolated or degenerate geometry).
-    std::vector<Eigen::Vector3d> normal(n_vertices);
-    std::vector<std::size_t> broken;
-    for (std::size_t v = 0; v < n_vertices; ++v) {
-        normal[v] = vec(normals, v);
-        const double length = normal[v].norm();
-        if (!(length > 1e-20) || !std::isfinite(length)) broken.push_back(v);
-        else normal[v] /= length;
-    }
-    if (!broken.empty()) {
+    // One vertex's frame from its unit normal n; false when t fell back to
+    // the frame of n alone.
+    const auto write_frame = [&](std::size_t v, const Eigen::Vector3d& n) {
+        const Eigen::Vector3d edge_vector = vec(positions, neighbours[v]) - vec(positions, v);
+        Eigen::Vector3d t = edge_vector - n * n.dot(edge_vector);
+        Eigen::Vector3d b;
+        const double length = t.norm();
+        // An edge within ~0.06° of the normal gives no usable direction.
+        const bool from_edge = neighbours[v] != v && length > 1e-3 * edge_vector.norm() && std::isfinite(length);
+        if (from_edge) {
+            t /= length;
+            b = n.cross(t);
+        } else {
+            basis_from_normal(n, t, b);
+        }
+        float* out = frames_out + 9 * v;
+        for (int k = 0; k < 3; ++k) {
+            out[k] = float(t[k]);
+            out[3 + k] = float(b[k]);
+            out[6 + k] = float(n[k]);
+        }
+        return from_edge;
+    };
+    // Every vertex whose normal Blender reports usable, in parallel (one pass,
+    // no copy of the normals); the rest are repaired below.
+    std::atomic<std::size_t> fallback{0};
+    std::vector<std::uint8_t> broken(n_vertices, 0);
+    parallel_for(n_vertices, {threads, 16384, "visibility.frames"}, [&](std::size_t begin, std::size_t end) {
+        std::size_t fallbacks = 0;
+        for (std::size_t v = begin; v < end; ++v) {
+            const Eigen::Vector3d normal = vec(normals, v);
+            const double length = normal.norm();
+            if (!(length > 1e-20) || !std::isfinite(length)) {
+                broken[v] = 1;
+                continue;
+            }
+            fallbacks += write_frame(v, normal / length) ? 0 : 1;
+        }
+        fallback += fallbacks;
+    });
+    // Normals that Blender reports as zero (isolated or degenerate geometry):
+    // the area-weighted normal of the vertex's triangles, or +z.
+    std::size_t repaired = 0;
+    for (const std::uint8_t b : broken) repaired += b;
+    if (repaired) {
         std::vector<Eigen::Vector3d> area_normal(n_vertices, Eigen::Vector3d::Zero());
         for (std::size_t t = 0; t < triangles.size() / 3; ++t) {
             const auto a = vec(positions, triangles[3 * t]), b = vec(positions, triangles[3 * t + 1]),
@@ -97,40 +132,15 @@ void vertex_frames(const std::vector<float>& positions, const std::vector<float>
             if (!face.allFinite()) continue;
             for (int k = 0; k < 3; ++k) area_normal[triangles[3 * t + k]] += face;
         }
-        for (std::size_t v : broken) {
+        for (std::size_t v = 0; v < n_vertices; ++v) {
+            if (!broken[v]) continue;
             const double length = area_normal[v].norm();
-            normal[v] = length > 0.0 && std::isfinite(length) ? Eigen::Vector3d(area_normal[v] / length)
-                                                               : Eigen::Vector3d::UnitZ();
+            const Eigen::Vector3d n = length > 0.0 && std::isfinite(length) ? Eigen::Vector3d(area_normal[v] / length)
+                                                                             : Eigen::Vector3d::UnitZ();
+            fallback += write_frame(v, n) ? 0 : 1;
         }
-        local.repaired_normals = broken.size();
+        local.repaired_normals = repaired;
     }
-    std::atomic<std::size_t> fallback{0};
-    parallel_for(n_vertices, {threads, 16384, "visibility.frames"}, [&](std::size_t begin, std::size_t end) {
-        std::size_t fallbacks = 0;
-        for (std::size_t v = begin; v < end; ++v) {
-            const Eigen::Vector3d& n = normal[v];
-            Eigen::Vector3d t = vec(positions, neighbours[v]) - vec(positions, v);
-            t -= n * n.dot(t);
-            Eigen::Vector3d b;
-            const double length = t.norm();
-            const double edge = (vec(positions, neighbours[v]) - vec(positions, v)).norm();
-            // An edge within ~0.06° of the normal gives no usable direction.
-            if (neighbours[v] != v && length > 1e-3 * edge && std::isfinite(length)) {
-                t /= length;
-                b = n.cross(t);
-            } else {
-                basis_from_normal(n, t, b);
-                ++fallbacks;
-            }
-            float* out = frames_out + 9 * v;
-            for (int k = 0; k < 3; ++k) {
-                out[k] = float(t[k]);
-                out[3 + k] = float(b[k]);
-                out[6 + k] = float(n[k]);
-            }
-        }
-        fallback += fallbacks;
-    });
     local.fallback_tangents = fallback.load();
     if (stats) *stats = local;
 }

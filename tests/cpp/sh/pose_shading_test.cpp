@@ -9,7 +9,9 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <map>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -18,6 +20,7 @@
 #include "sh/basis.hpp"
 #include "sh/point_sets.hpp"
 #include "sh/pose_shading.hpp"
+#include "sh/pose_shading_setup.hpp"
 #include "sh/projection.hpp"
 #include "sh/rotation.hpp"
 #include "sh/pose_shading_reference.hpp"
@@ -335,6 +338,47 @@ TEST(PoseShading, agrees_with_straightforward_reference_to_1e_10) {
             }
         }
     }
+}
+
+// Every SIMD target compiled in and supported here (AVX-512, AVX2, SSE4 and
+// the one-lane scalar reference on an AVX-512 machine) runs its own copy of
+// the kernel: each must agree with the straightforward reference, so a
+// target that computes wrongly fails here even when the CPU's best is fine.
+TEST(PoseShading, every_simd_target_agrees_with_straightforward_reference_to_1e_10) {
+    const std::vector<std::string> targets = simd_targets();
+    ASSERT_GE(targets.size(), 2u) << "expected the scalar reference and at least one SIMD target";
+    EXPECT_EQ(simd_target(), targets.front());
+    const std::map<std::string, int> lanes{{"SCALAR", 1}, {"EMU128", 1}, {"SSE4", 2}, {"AVX2", 4}, {"AVX3", 8}};
+    std::mt19937_64 rng(61);
+    for (const std::string& target : targets) {
+        force_simd_target(target);
+        ASSERT_EQ(simd_target(), target);
+        // The dispatch really runs that target's code: its batch width.
+        if (lanes.count(target)) EXPECT_EQ(detail::simd_lanes(), lanes.at(target)) << target;
+        for (int order : {2, 4, 8, 10}) {
+            Pose pose = random_pose(order, 2, 37, rng);  // 37: a partial batch on every width
+            Pose reference = pose;
+            const Eigen::MatrixXd lighting = random_lighting(order, rng);
+            PoseShader shader(order);
+            for (ShadingModel model : {ShadingModel::diffuse, ShadingModel::phong, ShadingModel::translucent}) {
+                ShadingParameters p;
+                p.model = model;
+                p.phong_exponent = 12.5;
+                p.camera = Eigen::Vector3d(0.3, -0.8, 0.4);
+                p.transmission = {0.4, 0.9, 0.1};
+                EXPECT_EQ(shader.shade(lighting, p, pose.buffers()).invalid_vertices, 0u);
+                testing::shade_pose_reference(order, lighting, p, reference.buffers());
+                for (std::size_t k = 0; k < pose.rgb.size(); ++k)
+                    ASSERT_NEAR(pose.rgb[k], reference.rgb[k], 1e-10)
+                        << target << " order " << order << " model " << int(model);
+                for (std::size_t k = 0; k < pose.n; ++k)
+                    ASSERT_NEAR(pose.visibility[k], reference.visibility[k], 1e-10) << target;
+            }
+        }
+    }
+    force_simd_target("");
+    EXPECT_EQ(simd_target(), targets.front());
+    EXPECT_THROW(force_simd_target("NEON"), ArgumentError);
 }
 
 TEST(PoseShading, turning_the_whole_scene_leaves_shades_unchanged) {
