@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include <Eigen/Geometry>
 
@@ -95,6 +96,36 @@ TEST(LightsIrradianceFit, a_single_pixel_sun_8_orders_above_the_sky_stays_finite
         }
         EXPECT_LE(rig_error(map, f, SunModel::blender4_cone), before * 1.0001) << "N " << count;
     }
+}
+
+// Mean relative RMS change of the suns' irradiance between consecutive frames.
+double mean_step(const std::vector<Eigen::MatrixXd>& e) {
+    double sum = 0.0;
+    for (std::size_t t = 1; t < e.size(); ++t) {
+        const Eigen::VectorXd a = e[t - 1] * Eigen::Vector3d(rec709_luminance[0], rec709_luminance[1], rec709_luminance[2]);
+        const Eigen::VectorXd b = e[t] * Eigen::Vector3d(rec709_luminance[0], rec709_luminance[1], rec709_luminance[2]);
+        sum += (b - a).norm() / a.norm();
+    }
+    return sum / double(e.size() - 1);
+}
+
+TEST(LightsIrradianceFit, a_slowly_rotating_map_gives_fitted_light_steps_no_larger_than_unfitted) {
+    // 0.5° per frame about +z: the map's own irradiance changes a little each
+    // frame; a rig whose lights jump changes more. Tracked (same points every
+    // frame), unfiltered, so only the fit differs.
+    const Image first = two_suns_on_a_sky(128, 64);
+    const auto n = check_normals();
+    std::vector<Eigen::MatrixXd> fitted, plain, reference;
+    for (int t = 0; t < 10; ++t) {
+        const EnvironmentMap map = as_map(rotate_equirectangular_z(first, t * 0.5 * std::numbers::pi / 180.0));
+        reference.push_back(exact_irradiance(map, n));
+        plain.push_back(sun_irradiance(rig(map, 16, false, SunModel::blender4_cone).lights, n, SunModel::blender4_cone));
+        fitted.push_back(sun_irradiance(rig(map, 16, true, SunModel::blender4_cone).lights, n, SunModel::blender4_cone));
+    }
+    const double map_step = mean_step(reference), plain_step = mean_step(plain), fitted_step = mean_step(fitted);
+    // Measured: map 0.417%, unfitted 0.500%, fitted 0.439% per frame.
+    EXPECT_LE(std::abs(fitted_step - map_step), std::abs(plain_step - map_step))
+        << "map " << map_step << " unfitted " << plain_step << " fitted " << fitted_step;
 }
 
 TEST(LightsIrradianceFit, rejects_bad_options) {
