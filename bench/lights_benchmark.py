@@ -30,6 +30,8 @@ sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import lights_make_test_videos as data  # noqa: E402
 from lights_median_cut import median_cut  # noqa: E402
 import _penumbra  # noqa: E402  (lights_make_test_videos put it on sys.path)
+sys.path.insert(0, os.path.join(ROOT, "bench"))
+import lights_fit_benchmark  # noqa: E402
 
 Y = np.array([0.2126, 0.7152, 0.0722])
 COUNTS = (4, 16, 64, 256, 1024)
@@ -265,6 +267,7 @@ def main():
         bias = math.sqrt(max(0.0, e * e - 0.5 * (shadows['noise'] ** 2 + noise ** 2)))
         lines.append(f"| {n} suns | {100 * e:.2f}% | {e / shadows['noise']:.2f}× | {100 * noise:.2f}% "
                      f"| {100 * bias:.2f}% | {shadows[f'{n} mean']:.3f} |")
+    lines += [""] + lights_fit_benchmark.run()
     path = os.path.join(ROOT, "docs", "lights-benchmark.md")
     with open(path + ".tmp", "w") as f:
         f.write("\n".join(lines) + "\n")

@@ -20,6 +20,7 @@
 #include "lights/clustering.hpp"
 #include "lights/rig.hpp"
 #include "lights/sampling.hpp"
+#include "lights/sun_irradiance.hpp"
 #include "lights/temporal.hpp"
 #include "numpy_image.hpp"
 
@@ -105,6 +106,11 @@ void bind_enums(py::module_& m) {
         {{"REGION", PowerMode::region}, {"EQUAL", PowerMode::equal}},
         "What each light carries: REGION (the power and colour of its region of the map) or EQUAL (the paper's "
         "equal powers).");
+    bind_enum<SunModel>(m, "SunModel", "sun_model",
+        {{"POINT", SunModel::point}, {"BLENDER3_DISC", SunModel::blender3_disc},
+         {"BLENDER4_CONE", SunModel::blender4_cone}},
+        "How Cycles spreads a sun's flux over its angle (core/lights/sun_irradiance.hpp): BLENDER3_DISC "
+        "(Blender 3.x), BLENDER4_CONE (4.0 and later), POINT (angle 0).");
 }
 
 py::dict read_map(const std::string& path, Projection mapping, int max_width, py::object config,
@@ -167,7 +173,8 @@ void bind_sources(py::module_& m) {
 }
 
 py::dict frame_lights(const py::array& pixels, Projection mapping, int count, SamplerKind sampler, bool blue_noise,
-                      PowerMode power, int max_width, int threads, std::pair<double, double> shift) {
+                      PowerMode power, int max_width, int threads, std::pair<double, double> shift,
+                      bool fit_irradiance, SunModel sun_model) {
     const EnvironmentMap map = map_from_array(pixels, map_options(mapping, {}, max_width, threads));
     LightOptions lo;
     lo.count = count;
@@ -176,6 +183,8 @@ py::dict frame_lights(const py::array& pixels, Projection mapping, int count, Sa
     lo.power = power;
     lo.threads = threads;
     lo.point_shift = Eigen::Vector2d(shift.first, shift.second);
+    lo.fit_irradiance = fit_irradiance;
+    lo.sun_model = sun_model;
     FrameLights f;
     {
         py::gil_scoped_release release;
@@ -225,18 +234,30 @@ void bind_frame_functions(py::module_& m) {
     m.def("frame_lights", &frame_lights, py::arg("pixels"), py::arg("mapping") = map.projection,
           py::arg("count") = light.count, py::arg("sampler") = light.sampler, py::arg("blue_noise") = light.blue_noise,
           py::arg("power") = light.power, py::arg("max_width") = map.max_width, py::arg("threads") = map.threads,
-          py::arg("shift") = std::pair<double, double>{0.0, 0.0},
+          py::arg("shift") = std::pair<double, double>{0.0, 0.0}, py::arg("fit_irradiance") = light.fit_irradiance,
+          py::arg("sun_model") = light.sun_model,
     "Lights of one scene-linear environment map (no temporal filtering): dict of directions, rgb, power, spread. "
-    "`shift` moves the point set (mod 1); a rig uses (0, 0).");
+    "`shift` moves the point set (mod 1); a rig uses (0, 0). `fit_irradiance` refits colours and directions so "
+    "the suns (drawn as `sun_model`) match the map's irradiance (core/lights/irradiance_fit.hpp).");
 
     m.def("exact_irradiance", &exact_irradiance_of, py::arg("pixels"), py::arg("normals"),
           py::arg("mapping") = map.projection, py::arg("max_width") = 0, py::arg("threads") = map.threads,
           "Irradiance (N, 3) of a diffuse surface for each normal under the whole map.");
 
-    m.def("irradiance", [](const py::array& directions, const py::array& rgb, const py::array& normals) {
-        return matrix_to_array(irradiance(to_lights(directions, rgb), vectors3(normals, "normals", true)));
-    }, py::arg("directions"), py::arg("rgb"), py::arg("normals"),
-    "Irradiance (N, 3) of directional lights: Σ rgb·max(0, n·d).");
+    m.def("irradiance", [](const py::array& directions, const py::array& rgb, const py::array& normals,
+                           py::object spread, SunModel sun_model) {
+        auto lights = to_lights(directions, rgb);
+        const auto n = vectors3(normals, "normals", true);
+        if (spread.is_none()) return matrix_to_array(irradiance(lights, n));
+        const auto s = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(spread);
+        if (!s || s.ndim() != 1 || std::size_t(s.shape(0)) != lights.size())
+            throw ArgumentError("spread must be a 1-D array with one value per light");
+        for (std::size_t k = 0; k < lights.size(); ++k) lights[k].spread = s.at(py::ssize_t(k));
+        return matrix_to_array(sun_irradiance(lights, n, sun_model));
+    }, py::arg("directions"), py::arg("rgb"), py::arg("normals"), py::arg("spread") = py::none(),
+    py::arg("sun_model") = SunModel::blender4_cone,
+    "Irradiance (N, 3) of directional lights: Σ rgb·max(0, n·d); with `spread` (RMS region radius per light), "
+    "of the suns the add-on writes, drawn as `sun_model` (core/lights/sun_irradiance.hpp).");
 
     m.def("cluster", &cluster, py::arg("directions"), py::arg("rgb"), py::arg("max_clusters"),
           py::arg("correction") = clustering.correction, py::arg("full_sphere") = clustering.full_sphere,

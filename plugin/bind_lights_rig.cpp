@@ -34,7 +34,8 @@ std::unique_ptr<PyRigBuilder> make_builder(int count, SamplerKind sampler, bool 
                                            Projection mapping, const std::vector<double>& lens, int max_width,
                                            bool temporal_filter, double frames_per_second, double pass_hz,
                                            double stop_hz, int cluster_max, double cluster_correction,
-                                           double adaptive_tolerance, py::object world_from_map, int threads) {
+                                           double adaptive_tolerance, py::object world_from_map, int threads,
+                                           bool fit_irradiance, SunModel sun_model) {
     RigOptions o;
     o.map = map_options(mapping, lens, max_width, threads);
     o.lights.count = count;
@@ -42,6 +43,8 @@ std::unique_ptr<PyRigBuilder> make_builder(int count, SamplerKind sampler, bool 
     o.lights.blue_noise = blue_noise;
     o.lights.power = power;
     o.lights.threads = threads;
+    o.lights.fit_irradiance = fit_irradiance;
+    o.lights.sun_model = sun_model;
     o.temporal_filter = temporal_filter;
     o.frames_per_second = frames_per_second;
     o.pass_hz = pass_hz;
@@ -159,7 +162,8 @@ void bind_lights_rig(py::module_& m) {
           py::arg("stop_hz") = rig.stop_hz, py::arg("cluster_max") = rig.cluster_max,
           py::arg("cluster_correction") = rig.cluster_correction,
           py::arg("adaptive_tolerance") = rig.adaptive_tolerance, py::arg("world_from_map") = py::none(),
-          py::arg("threads") = map.threads);
+          py::arg("threads") = map.threads, py::arg("fit_irradiance") = light.fit_irradiance,
+          py::arg("sun_model") = light.sun_model);
     bind_frames_in(c);
     bind_results_out(c);
 }

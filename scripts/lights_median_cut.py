@@ -12,10 +12,18 @@ Y = np.array([0.2126, 0.7152, 0.0722])
 
 
 def median_cut(image, n):
+    """Directions (n, 3) and rgb (n, 3) of median_cut_suns."""
+    d, rgb, _ = median_cut_suns(image, n)
+    return d, rgb
+
+
+def median_cut_suns(image, n):
     """Debevec 2005: split the cosθ-weighted map into n regions of equal
     energy, cutting each region across its longest side (width measured as
     cos(latitude)·columns); a light at each region's energy centroid with the
-    region's summed L·Ω. n must be a power of two (it is here)."""
+    region's summed L·Ω, and its spread (RMS angular radius about the
+    centroid, what the add-on makes a sun's angle from). n must be a power of
+    two (it is here)."""
     h, w = image.shape[:2]
     omega = data.solid_angles(h, w)[:, None]
     flux = image * omega[..., None]                      # L·Ω per pixel
@@ -46,12 +54,16 @@ def median_cut(image, n):
                 new += [(r0, k, c0, c1), (k, r1, c0, c1)]
         regions = new
     dirs = data.directions(h, w)
-    out_d, out_rgb = [], []
+    out_d, out_rgb, out_spread = [], [], []
     for r0, r1, c0, c1 in regions:
         f = flux[r0:r1, c0:c1].reshape(-1, 3)
         l = lum[r0:r1, c0:c1].reshape(-1)
         d = dirs[r0:r1, c0:c1].reshape(-1, 3)
         m = (l[:, None] * d).sum(0)
-        out_d.append(m / np.linalg.norm(m) if np.linalg.norm(m) > 0 else d[len(d) // 2])
+        centroid = m / np.linalg.norm(m) if np.linalg.norm(m) > 0 else d[len(d) // 2]
+        out_d.append(centroid)
         out_rgb.append(f.sum(0))
-    return np.array(out_d), np.array(out_rgb)
+        # RMS angular radius about the centroid, as the rig's regions (the sun's angle).
+        angle = np.arccos(np.clip(d @ centroid, -1.0, 1.0))
+        out_spread.append(math.sqrt((l * angle ** 2).sum() / l.sum()) if l.sum() > 0 else 0.0)
+    return np.array(out_d), np.array(out_rgb), np.array(out_spread)

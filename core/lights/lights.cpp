@@ -9,6 +9,7 @@
 
 #include "common/error.hpp"
 #include "lights/direction_index.hpp"
+#include "lights/irradiance_fit.hpp"
 #include "common/parallel.hpp"
 #include "sh/point_sets.hpp"
 
@@ -186,6 +187,13 @@ FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistributio
         equal_power(map, dist, samples, options, out);
     else
         region_power(map, dist, samples, options, out);
+    if (options.fit_irradiance) {
+        IrradianceFitOptions fit;
+        fit.sun_model = options.sun_model;
+        fit.luminance = options.luminance;
+        fit.threads = options.threads;
+        fit_irradiance(map, out.lights, fit);
+    }
     return out;
 }
 

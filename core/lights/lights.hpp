@@ -39,6 +39,9 @@ namespace penumbra::lights {
 
 enum class PowerMode { equal, region };
 
+// How Cycles spreads a sun's flux over its angle (sun_irradiance.hpp).
+enum class SunModel { point, blender3_disc, blender4_cone };
+
 struct LightOptions {
     int count = 64;                 // N, at most the map's cell count
     static constexpr Range<int> count_range{1, unbounded_int};
@@ -51,6 +54,11 @@ struct LightOptions {
     // the benchmark draws a fresh shift per frame to measure untracked,
     // resampled-every-frame lights.
     Eigen::Vector2d point_shift = Eigen::Vector2d::Zero();
+    // After the powers: refit every light's rgb (never negative) and move its
+    // direction within its region so the suns' irradiance, under `sun_model`,
+    // matches the map's (irradiance_fit.hpp).
+    bool fit_irradiance = false;
+    SunModel sun_model = SunModel::blender4_cone;
 };
 
 struct Light {

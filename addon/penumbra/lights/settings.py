@@ -37,6 +37,10 @@ class LightRigSceneSettings(bpy.types.PropertyGroup):
     power: bpy.props.EnumProperty(name="Power", items=POWER_ITEMS, default="REGION")
     blue_noise: bpy.props.BoolProperty(name="Blue Noise", **limits("lights.blue_noise"),
                                        description="Start from Lloyd-relaxed Halton points")
+    fit_irradiance: bpy.props.BoolProperty(
+        name="Fit Irradiance", default=False,
+        description="Refit each sun's colour and nudge its direction within its region so the suns, as this "
+                    "Blender draws them, light a diffuse surface as the map does (slower per frame)")
     temporal_filter: bpy.props.BoolProperty(name="Temporal Filter", **limits("lights.temporal_filter"),
                                             description="Low-pass each light's direction and power over time")
     cluster_max: bpy.props.IntProperty(name="Cluster Max", **limits("lights.cluster_max"),

@@ -466,3 +466,28 @@ def test_shadow_limit_gives_shadows_to_the_eight_strongest(addon, tmp_path):
     assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, limit_shadows=False,
                                             json_path=json_path) == {"FINISHED"}
     assert all(o.data.use_shadow for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT")
+
+
+def test_fit_irradiance_makes_the_suns_as_drawn_closer_to_the_maps_irradiance(addon, tmp_path):
+    """The operator's Fit Irradiance reaches the core: the suns it writes, drawn
+    as this Blender draws a sun of their angle (disc in 3.x, cone in 4.x;
+    core/lights/sun_irradiance.hpp), light a diffuse surface closer to the
+    map's own irradiance (numpy) than the unfitted rig's suns."""
+    scene = addon
+    img = _sky_and_sun(sun_radiance=400.0, radius=0.08)
+    path = _write_map(str(tmp_path / "map.exr"), img)
+    normals = _core().sh.fibonacci_directions(500)
+    ref = _map_irradiance(img, normals)
+    model = "BLENDER4_CONE" if bpy.app.version >= (4, 0, 0) else "BLENDER3_DISC"
+    y = np.array([0.2126, 0.7152, 0.0722])
+    errors = {}
+    for fit in (False, True):
+        assert bpy.ops.penumbra.build_light_rig(filepath=path, count=16, fit_irradiance=fit,
+                                                json_path=str(tmp_path / f"{fit}.json")) == {"FINISHED"}
+        suns = [o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"]
+        d = np.array([(o.matrix_world.to_3x3() @ mathutils.Vector((0, 0, 1))).normalized() for o in suns])
+        rgb = np.array([_sun_rgb(o) for o in suns])
+        spread = np.array([o.data.angle for o in suns]) / (2.0 * math.sqrt(2.0))  # the add-on's angle rule, inverted
+        got = _core().lights.irradiance(d, rgb, normals, spread=spread, sun_model=model)
+        errors[fit] = math.sqrt(((got - ref) @ y) @ ((got - ref) @ y) / ((ref @ y) @ (ref @ y)))
+    assert errors[True] < 0.7 * errors[False], errors
