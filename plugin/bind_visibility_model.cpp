@@ -196,7 +196,7 @@ py::dict report_dict(const vis::FitReport& report) {
 
 py::tuple fit_model(const vis::TrainingSet& set, const std::vector<std::pair<bool, bool>>& influence, int lobes,
                     vis::PoseFeatures features, double joint_tolerance_degrees, int holdout_stride,
-                    double constant_tolerance, double prune_tolerance, int zh_iterations, double axis_prior,
+                    double constant_tolerance, double prune_tolerance, int zh_iterations, int frame_zh_iterations, double axis_prior,
                     int threads, py::object progress) {
     vis::FitSettings s;
     s.lobes = lobes;
@@ -206,6 +206,7 @@ py::tuple fit_model(const vis::TrainingSet& set, const std::vector<std::pair<boo
     s.constant_tolerance = constant_tolerance;
     s.prune_tolerance = prune_tolerance;
     s.zh_iterations = zh_iterations;
+    s.frame_zh_iterations = frame_zh_iterations;
     s.axis_prior = axis_prior;
     s.threads = threads;
     std::vector<vis::BoneInfluence> inf;
@@ -233,6 +234,7 @@ void bind_visibility_model(py::module_& m) {
           py::arg("features") = fit.features, py::arg("joint_tolerance_degrees") = fit.joint_tolerance_degrees,
           py::arg("holdout_stride") = fit.holdout_stride, py::arg("constant_tolerance") = fit.constant_tolerance,
           py::arg("prune_tolerance") = fit.prune_tolerance, py::arg("zh_iterations") = fit.zh_iterations,
+          py::arg("frame_zh_iterations") = fit.frame_zh_iterations,
           py::arg("axis_prior") = fit.axis_prior, py::arg("threads") = fit.threads, py::arg("progress") = py::none(),
           "Fits ZH lobes per vertex and frame and the linear pose model (paper §3.1). bone_influence: one "
           "(deforms_mesh, rigid_for_whole_mesh) pair per bone of the training set. Returns (model, report).");

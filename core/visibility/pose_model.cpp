@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <numbers>
@@ -13,6 +14,7 @@
 #include <Eigen/SVD>
 
 #include "common/error.hpp"
+#include "common/hash.hpp"
 #include "sh/brdf_operator.hpp"
 #include "common/parallel.hpp"
 
@@ -79,7 +81,7 @@ void check_fit_settings(const FitSettings& s) {
         throw ArgumentError("holdout_stride must be 0 (none) or >= 2");
     if (!(s.constant_tolerance >= 0.0) || !(s.prune_tolerance >= 0.0))
         throw ArgumentError("tolerances must be >= 0");
-    if (s.zh_iterations < 0 || !(s.axis_prior >= 0.0)) throw ArgumentError("ZH fit settings out of range");
+    if (s.zh_iterations < 0 || s.frame_zh_iterations < 0 || !(s.axis_prior >= 0.0)) throw ArgumentError("ZH fit settings out of range");
     check_range("threads", s.threads, threads_range);
 }
 
@@ -181,6 +183,18 @@ struct FitShape {
     std::size_t V, F, k;
 };
 
+// The first frame before f whose visibility of vertex v equals frame f's
+// bit for bit (hashes[0..f] hold each frame's hash), or f.
+std::size_t earlier_equal(const TrainingSet& set, std::size_t v, int n_sh, std::size_t f,
+                          const std::vector<std::uint64_t>& hashes) {
+    const float* mine = set.frames[f].visibility.data() + v * n_sh;
+    for (std::size_t g = 0; g < f; ++g)
+        if (hashes[g] == hashes[f] &&
+            std::memcmp(set.frames[g].visibility.data() + v * n_sh, mine, sizeof(float) * n_sh) == 0)
+            return g;
+    return f;
+}
+
 // Step 1 (fig. 2b): ZH lobes per vertex and frame, the rows of B (F × V·d).
 // Each vertex's frames are fitted from a reference fit of its mean
 // visibility (zh_fit.hpp). Adds the lobes' errors against the baked SH to
@@ -196,10 +210,13 @@ Eigen::MatrixXf fit_frame_lobes(const TrainingSet& set, const FitSettings& setti
     zs.lobes = shape.lobes;
     zs.iterations = settings.zh_iterations;
     zs.axis_prior = settings.axis_prior;
+    ZhFitSettings zs_frame = zs;
+    zs_frame.iterations = settings.frame_zh_iterations;
     parallel_for(shape.V, {settings.threads, 16, "visibility.zh_fit", 0.0, 0.8},
                  [&](std::size_t begin, std::size_t end) {
         ErrorSums local;
         std::vector<double> mean(n_sh), sh(n_sh), ref(d), params(d), fitted(n_sh);
+        std::vector<std::uint64_t> hashes(F);
         for (std::size_t v = begin; v < end; ++v) {
             std::fill(mean.begin(), mean.end(), 0.0);
             for (const auto& frame : set.frames)
@@ -208,9 +225,20 @@ Eigen::MatrixXf fit_frame_lobes(const TrainingSet& set, const FitSettings& setti
             fit_zh_lobes(zs, mean.data(), nullptr, ref.data());
             for (std::size_t f = 0; f < F; ++f) {
                 const float* truth = set.frames[f].visibility.data() + v * n_sh;
-                for (int i = 0; i < n_sh; ++i) sh[i] = truth[i];
-                fit_zh_lobes(zs, sh.data(), ref.data(), params.data());
-                for (int i = 0; i < d; ++i) B(f, v * d + i) = float(params[i]);
+                // A vertex's visibility repeats exactly whenever no ray changes
+                // between two poses (over half the (vertex, frame) pairs of
+                // the humanoid at 128 rays): the fit, a function of the SH
+                // vector and the reference alone, is then copied, not redone.
+                hashes[f] = fnv1a64(truth, sizeof(float) * n_sh);
+                const std::size_t same = earlier_equal(set, v, n_sh, f, hashes);
+                if (same < f) {
+                    for (int i = 0; i < d; ++i) B(f, v * d + i) = B(same, v * d + i);
+                    for (int i = 0; i < d; ++i) params[i] = B(same, v * d + i);
+                } else {
+                    for (int i = 0; i < n_sh; ++i) sh[i] = truth[i];
+                    fit_zh_lobes(zs_frame, sh.data(), ref.data(), params.data());
+                    for (int i = 0; i < d; ++i) B(f, v * d + i) = float(params[i]);
+                }
                 lobes_to_sh(order, shape.lobes, params.data(), fitted.data());
                 local.add(order, fitted.data(), truth);
             }
