@@ -92,7 +92,8 @@ def test_bake_replaces_a_noise_driven_ramp_and_keeps_the_original(addon, tmp_pat
     image.pixels.foreach_get(pixels)
     pixels = pixels.reshape(32, 64, 4)
     from penumbra.colormap import ramp as ramp_io
-    knots = native.module.colormap.ramp_to_knots(ramp_io.ramp_stops(ramp), "LINEAR", "RGB", "NEAR", sampling="cycles")
+    knots = native.module.colormap.ramp_to_knots(ramp_io.ramp_stops(ramp), "LINEAR", "RGB", "NEAR", sampling="cycles",
+                                                 table_size=ramp_io.renderer_table_size(addon))
     expect = native.module.colormap.lut_knots(knots["positions"], knots["colors"], knots["interpolation"], 64, 32,
                                               spec["sigma_max"], spec["mean_min"], spec["mean_max"])
     np.testing.assert_allclose(pixels, expect, atol=1e-6)
