@@ -27,6 +27,7 @@ from penumbra import native  # noqa: E402
 from penumbra.visibility import bake, runtime, scene_data  # noqa: E402
 import visibility_character  # noqa: E402
 from svg_plot import svg_plot  # noqa: E402
+from cycles_ao_bake import cycles_ao  # noqa: E402  (bench/, this script's folder)
 
 QUICK = "--quick" in sys.argv
 RUNTIME_ONLY = "--runtime" in sys.argv  # only the run-time section (docs rewritten in place)
@@ -111,34 +112,6 @@ def model_sh(model, unseen, joints_index):
 
 def truth_sh(unseen):
     return np.stack([unseen.visibility(i).astype(np.float64) for i in range(len(unseen))])
-
-
-def cycles_ao_seconds(obj, frames, samples):
-    """Cycles' own AO bake to a colour attribute, per frame, same sample count."""
-    scene = bpy.context.scene
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = samples
-    scene.cycles.use_denoising = False
-    if hasattr(scene.render.bake, "target"):
-        scene.render.bake.target = "VERTEX_COLORS"
-    mesh = obj.data
-    if "ao" not in mesh.color_attributes:
-        mesh.color_attributes.new("ao", "FLOAT_COLOR", "POINT")
-    mesh.color_attributes.active_color = mesh.color_attributes["ao"]
-    material = bpy.data.materials.new("bake")
-    material.use_nodes = True
-    if not mesh.materials:
-        mesh.materials.append(material)
-    times = []
-    for frame in frames:
-        scene.frame_set(frame)
-        started = time.perf_counter()
-        bpy.ops.object.bake(type="AO", target="VERTEX_COLORS")
-        times.append(time.perf_counter() - started)
-    values = np.empty(len(mesh.vertices) * 4, dtype=np.float32)
-    mesh.color_attributes["ao"].data.foreach_get("color", values)
-    return times, float(values.reshape(-1, 4)[:, 0].mean())
 
 
 def _median_and_spread(values):
@@ -460,7 +433,8 @@ def main():
     row128 = next(r for r in sweep if r["rays"] == 128 and r["lobes"] == 2)
     ours = row128["bake_seconds"] + row128["fit_seconds"]
     cycles_frames = TRAIN[:2] if QUICK else TRAIN[:3]
-    cycles_times, cycles_mean_ao = cycles_ao_seconds(obj, cycles_frames, 128)
+    cycles_ao_values, cycles_times = cycles_ao(obj, cycles_frames, 128)
+    cycles_mean_ao = float(cycles_ao_values[:, -1].mean())
     per_frame = float(np.mean(cycles_times))
     results["cycles"] = {
         "frames_measured": len(cycles_frames), "seconds_per_frame": per_frame,

@@ -31,6 +31,7 @@ sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
 
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
+from cycles_ao_bake import cycles_ao  # noqa: E402  (bench/, this script's folder)
 from penumbra.visibility import bake, scene_data  # noqa: E402
 import visibility_humanoid  # noqa: E402
 from svg_plot import figure  # noqa: E402
@@ -79,35 +80,6 @@ def bake_frames(obj, frames):
     return job.training, time.perf_counter() - started
 
 
-def cycles_ao(obj, frames):
-    """Cycles' AO bake to a point colour attribute per frame: (V, frames) AO and seconds per frame."""
-    scene = bpy.context.scene
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = CYCLES_SAMPLES
-    scene.cycles.use_denoising = False
-    if hasattr(scene.render.bake, "target"):
-        scene.render.bake.target = "VERTEX_COLORS"
-    mesh = obj.data
-    if "ao" not in mesh.color_attributes:
-        mesh.color_attributes.new("ao", "FLOAT_COLOR", "POINT")
-    mesh.color_attributes.active_color = mesh.color_attributes["ao"]
-    if not mesh.materials:
-        material = bpy.data.materials.new("bake")
-        material.use_nodes = True
-        mesh.materials.append(material)
-    values = np.empty(len(mesh.vertices) * 4, dtype=np.float32)
-    ao, seconds = [], []
-    for frame in frames:
-        scene.frame_set(frame)
-        started = time.perf_counter()
-        bpy.ops.object.bake(type="AO", target="VERTEX_COLORS")
-        seconds.append(time.perf_counter() - started)
-        mesh.color_attributes["ao"].data.foreach_get("color", values)
-        ao.append(values.reshape(-1, 4)[:, 0].astype(np.float64))
-    return np.stack(ao, axis=1), seconds
-
-
 def frame_ao(core, sh_frames):
     """(V, frames) AO of SH visibility (frames, V, order²)."""
     return np.stack([core.visibility.ambient_occlusion(f) for f in sh_frames], axis=1)
@@ -144,8 +116,8 @@ def accuracy(core, obj, influence, results):
     log(f"bake {bake_seconds:.1f} s ({len(TRAIN)} frames), fit {fit_seconds:.1f} s "
         f"(ZH {report['seconds_zh_fit']:.1f} s, linear {report['seconds_linear']:.1f} s), "
         f"{len(model.joints)} active joints")
-    cycles_held, cycles_held_seconds = cycles_ao(obj, HELD_OUT)
-    cycles_train_ao, cycles_train_seconds = cycles_ao(obj, TRAIN)
+    cycles_held, cycles_held_seconds = cycles_ao(obj, HELD_OUT, CYCLES_SAMPLES)
+    cycles_train_ao, cycles_train_seconds = cycles_ao(obj, TRAIN, CYCLES_SAMPLES)
     truth = np.stack([held_out.visibility(i).astype(np.float64) for i in range(len(held_out))])
     mean_sh = np.mean([training.visibility(i).astype(np.float64) for i in range(len(training))], axis=0)
     ao = {"model": frame_ao(core, model_sh(core, model, held_out)),
