@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -314,30 +315,39 @@ TEST(PoseShading, matches_brute_force_hemisphere_quadrature) {
     }
 }
 
+// Shades a random pose with each BRDF and checks every vertex against the
+// straightforward reference to 1e-10; `label` names the case on failure.
+void expect_every_model_matches_reference(int order, int lobes, std::size_t vertices, double phong_exponent,
+                                          const Eigen::Vector3d& camera, const std::array<double, 3>& transmission,
+                                          std::mt19937_64& rng, const std::string& label) {
+    Pose pose = random_pose(order, lobes, vertices, rng);
+    Pose reference = pose;
+    const Eigen::MatrixXd lighting = random_lighting(order, rng);
+    PoseShader shader(order);
+    for (ShadingModel model : {ShadingModel::diffuse, ShadingModel::phong, ShadingModel::translucent}) {
+        ShadingParameters p;
+        p.model = model;
+        p.phong_exponent = phong_exponent;
+        p.camera = camera;
+        p.transmission = {transmission[0], transmission[1], transmission[2]};
+        EXPECT_EQ(shader.shade(lighting, p, pose.buffers()).invalid_vertices, 0u);
+        testing::shade_pose_reference(order, lighting, p, reference.buffers());
+        for (std::size_t k = 0; k < pose.rgb.size(); ++k)
+            ASSERT_NEAR(pose.rgb[k], reference.rgb[k], 1e-10) << label << " model " << int(model);
+        for (std::size_t k = 0; k < pose.n; ++k)
+            ASSERT_NEAR(pose.visibility[k], reference.visibility[k], 1e-10) << label;
+    }
+}
+
 TEST(PoseShading, agrees_with_straightforward_reference_to_1e_10) {
     std::mt19937_64 rng(6);
-    // Orders 1–8 take the unrolled kernels, 10 and 16 the runtime-order one.
-    for (int order : {1, 2, 3, 4, 5, 6, 7, 8, 10, 16}) {
-        for (int lobes : {1, 2, 3}) {
-            Pose pose = random_pose(order, lobes, 29, rng);  // 29: a partial batch at the end
-            Pose reference = pose;
-            const Eigen::MatrixXd lighting = random_lighting(order, rng);
-            PoseShader shader(order);
-            for (ShadingModel model : {ShadingModel::diffuse, ShadingModel::phong, ShadingModel::translucent}) {
-                ShadingParameters p;
-                p.model = model;
-                p.phong_exponent = 37.25;
-                p.camera = Eigen::Vector3d(-1.0, 0.5, 0.8);  // inside the cloud of positions
-                p.transmission = {0.7, 0.2, 1.3};
-                EXPECT_EQ(shader.shade(lighting, p, pose.buffers()).invalid_vertices, 0u);
-                testing::shade_pose_reference(order, lighting, p, reference.buffers());
-                for (std::size_t k = 0; k < pose.rgb.size(); ++k)
-                    ASSERT_NEAR(pose.rgb[k], reference.rgb[k], 1e-10)
-                        << "order " << order << " lobes " << lobes << " model " << int(model);
-                for (std::size_t k = 0; k < pose.n; ++k) ASSERT_NEAR(pose.visibility[k], reference.visibility[k], 1e-10);
-            }
-        }
-    }
+    // Orders 1–8 take the unrolled kernels, 10 and 16 the runtime-order one;
+    // 29 vertices: a partial batch at the end; the camera inside the positions.
+    for (int order : {1, 2, 3, 4, 5, 6, 7, 8, 10, 16})
+        for (int lobes : {1, 2, 3})
+            expect_every_model_matches_reference(order, lobes, 29, 37.25, Eigen::Vector3d(-1.0, 0.5, 0.8),
+                                                 {0.7, 0.2, 1.3}, rng,
+                                                 "order " + std::to_string(order) + " lobes " + std::to_string(lobes));
 }
 
 // Every SIMD target compiled in and supported here (AVX-512, AVX2, SSE4 and
@@ -355,26 +365,9 @@ TEST(PoseShading, every_simd_target_agrees_with_straightforward_reference_to_1e_
         ASSERT_EQ(simd_target(), target);
         // The dispatch really runs that target's code: its batch width.
         if (lanes.count(target)) EXPECT_EQ(detail::simd_lanes(), lanes.at(target)) << target;
-        for (int order : {2, 4, 8, 10}) {
-            Pose pose = random_pose(order, 2, 37, rng);  // 37: a partial batch on every width
-            Pose reference = pose;
-            const Eigen::MatrixXd lighting = random_lighting(order, rng);
-            PoseShader shader(order);
-            for (ShadingModel model : {ShadingModel::diffuse, ShadingModel::phong, ShadingModel::translucent}) {
-                ShadingParameters p;
-                p.model = model;
-                p.phong_exponent = 12.5;
-                p.camera = Eigen::Vector3d(0.3, -0.8, 0.4);
-                p.transmission = {0.4, 0.9, 0.1};
-                EXPECT_EQ(shader.shade(lighting, p, pose.buffers()).invalid_vertices, 0u);
-                testing::shade_pose_reference(order, lighting, p, reference.buffers());
-                for (std::size_t k = 0; k < pose.rgb.size(); ++k)
-                    ASSERT_NEAR(pose.rgb[k], reference.rgb[k], 1e-10)
-                        << target << " order " << order << " model " << int(model);
-                for (std::size_t k = 0; k < pose.n; ++k)
-                    ASSERT_NEAR(pose.visibility[k], reference.visibility[k], 1e-10) << target;
-            }
-        }
+        for (int order : {2, 4, 8, 10})  // 37 vertices: a partial batch on every width
+            expect_every_model_matches_reference(order, 2, 37, 12.5, Eigen::Vector3d(0.3, -0.8, 0.4), {0.4, 0.9, 0.1},
+                                                 rng, target + " order " + std::to_string(order));
     }
     force_simd_target("");
     EXPECT_EQ(simd_target(), targets.front());
