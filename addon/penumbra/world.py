@@ -40,12 +40,11 @@ E(world_from_mapᵀ·d)).
 The lit World is Σ weight · strength · colour(lookup(d)) over the
 Backgrounds that reach the output (`terms`): a Mix Shader weighs its first
 Shader by 1 − Fac and its second by Fac, Fac clamped to [0, 1]
-(svm_node_mix_closure, kernel/svm/closure.h), an Add Shader both by 1. Every
-reader gets the one-Background fields (kind, colour, strength, image,
-world_from_map); a reader that takes the whole sum (read(...,
-weighted_sum=True): the light rig) gets `terms`, and the others get a
-problem for every Background beyond one and every lookup that is not a
-rotation.
+(svm_node_mix_closure, kernel/svm/closure.h), an Add Shader both by 1. Both
+tools take the whole sum: the light rig resamples it onto a latlong map, the
+SH lighting projects each term. The one-Background fields (kind, colour,
+strength, image, world_from_map) describe the first image's term, for a
+panel and for the rig's fast path (`rotated_image`).
 
 What cannot be represented (a Sky Texture, a Strength from a Math node, a
 Location driven by other nodes, a Fac from Is Diffuse Ray...) is not
@@ -78,7 +77,7 @@ class WorldLighting:
     world_from_map  (3, 3) rotation: what the map shows at m lights from world_from_map·m
     terms           every Background that lights the scene, as BackgroundTerm;
                     the fields above are the one term (the first image's
-                    when there are several; a problem unless weighted_sum)
+                    when there are several)
     source          what was read ("environment 'sky.exr'", "uniform Background colour"...)
     notes           what a user may not expect but is read right (a branch
                     shown to the camera only)
@@ -163,8 +162,9 @@ class DirectionLookup:
     steps          [(A, b, normalize)] in the order they act on d
     rotation_part  the product of the steps' rotations: m = rotation_part·d
                    when nothing warps
-    warps          what makes it more than a rotation, one message per node
-                   input (a problem for readers that take only a rotation)"""
+    warps          what makes it more than a rotation, one entry per node
+                   input (the light rig then resamples the World, the SH
+                   lighting projects the resampled term)"""
 
     def __init__(self):
         self.steps = []
@@ -271,16 +271,14 @@ def feed(socket, path=()):
     raise WorldError("the World's node tree loops through its node groups: break the loop")
 
 
-def read_scene(scene, weighted_sum=False):
+def read_scene(scene):
     """read() of the scene's World for the scene's render engine."""
-    return read(scene.world, scene.render.engine, weighted_sum)
+    return read(scene.world, scene.render.engine)
 
 
-def read(world, engine=None, weighted_sum=False):
+def read(world, engine=None):
     """The WorldLighting of a World as `engine` (scene.render.engine) renders
-    it. weighted_sum: the caller takes every term with any lookup (the light
-    rig); otherwise only one Background seen through a rotation is taken,
-    and more is a problem."""
+    it: every Background term with its lookup."""
     r = WorldLighting()
     if world is None:
         r.source = "no World: black"
@@ -301,7 +299,7 @@ def read(world, engine=None, weighted_sum=False):
                           f"'{output.name}': connect a Background node to it")
         return _unconnected_environments(world, r)
     _read_shader(surface, 1.0, "the World output", r)
-    _take_terms(r, weighted_sum)
+    _take_terms(r)
     return _unconnected_environments(world, r)
 
 
@@ -406,11 +404,9 @@ def _read_background(background, path, weight, r):
     return term
 
 
-def _take_terms(r, weighted_sum):
+def _take_terms(r):
     """The one-Background fields from r.terms: the one term, or the first
-    image's (a problem unless the reader takes the sum); a lookup that is not
-    a rotation is a problem unless the reader takes the sum, and its
-    rotation stands in."""
+    image's when there are several."""
     terms = r.terms
     if not terms:
         r.source = "no Background reaches the World Output: black"
@@ -422,13 +418,6 @@ def _take_terms(r, weighted_sum):
     r.world_from_map = main.lookup.rotation_part.T
     shares = [t.source if t.weight == 1.0 else f"{t.weight:g} × {t.source}" for t in terms]
     r.source = " + ".join(shares)
-    if weighted_sum:
-        return
-    r.problems.extend(main.lookup.warps)
-    if len(terms) > 1:
-        names = ", ".join(f"'{t.background.name}'" for t in terms)
-        r.problems.append(f"the World adds {len(terms)} Backgrounds ({names}), which is unsupported here: "
-                          f"'{main.background.name}' stands in at its share; use one Background")
 
 
 def _float_input(socket, path, r, what):
@@ -506,12 +495,10 @@ def _mapping_step(node, path, r):
     if node.vector_type in {"POINT", "TEXTURE"}:
         location = _vector_input(node.inputs["Location"], path, r, f"the Location of '{name}'")
         if np.any(np.abs(location) > 1e-9):
-            warps.append(f"the Mapping node '{name}' has a Location, which moves the lookup off the sphere "
-                         "(unsupported here: ignored); set it to 0")
+            warps.append(f"the Location of '{name}'")
     if not (scale[0] > 0.0 and np.allclose(scale, scale[0], rtol=1e-6)):
         # A uniform positive scale only changes the length, which the lookup drops.
-        warps.append(f"the Mapping node '{name}' has a Scale that is not the same positive number on every axis, "
-                     "which distorts or mirrors the map (unsupported here: ignored); set it to 1")
+        warps.append(f"the Scale of '{name}'")
     inverse = np.divide(1.0, scale, out=np.zeros(3), where=scale != 0.0)  # safe_divide: x/0 = 0
     if node.vector_type == "TEXTURE":
         a = inverse[:, None] * rotation.T  # diag(1/s)·Rᵀ
@@ -545,8 +532,7 @@ def _vector_rotate_step(node, path, r):
         rotation = _axis_angle(axis / length, -angle if node.invert else angle)
     warps = []
     if np.any(np.abs(center) > 1e-9):
-        warps.append(f"the Vector Rotate node '{name}' has a Center, which moves the lookup off the sphere "
-                     "(unsupported here: ignored); set it to 0")
+        warps.append(f"the Center of '{name}'")
     return (rotation, center - rotation @ center, False), rotation, warps
 
 

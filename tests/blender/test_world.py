@@ -297,11 +297,11 @@ def test_a_full_euler_rotation_equals_the_map_resampled(addon, tmp_path, vector_
     assert np.abs(got - expected).max() < 0.01 * np.abs(expected).max(), np.abs(got - expected).max()
 
 
-def test_what_only_a_rotation_reader_or_no_reader_can_take_is_reported(addon, tmp_path):
-    """A Location and a mirroring Scale are problems for the SH lighting, which
-    takes a rotation only, and none for the light rig, which resamples the
-    World; what neither can represent is a problem for both, naming the node
-    and the input."""
+def test_a_location_and_scale_are_read_and_what_no_reader_can_take_is_reported(addon, tmp_path):
+    """A Location and a mirroring Scale make the lookup more than a rotation:
+    both tools take it (the light rig resamples the World, the SH lighting
+    projects the resampled term), so it is no problem; what neither can
+    represent is a problem for both, naming the node and the input."""
     scene = addon
     w = _map_world(scene, str(tmp_path / "map.exr"), _sky_and_sun(), (0.0, 0.0, 0.5))
     tree = w.node_tree
@@ -309,15 +309,14 @@ def test_what_only_a_rotation_reader_or_no_reader_can_take_is_reported(addon, tm
     mapping.inputs["Location"].default_value = (0.5, 0.0, 0.0)
     mapping.inputs["Scale"].default_value = (-1.0, 1.0, 1.0)
     reading = world.read_scene(scene)
-    assert reading.kind == "environment" and not reading.supported
-    assert "has a Location" in reading.note and "set it to 0" in reading.note
-    assert "mirrors the map" in reading.note and "set it to 1" in reading.note
-    assert world.read_scene(scene, weighted_sum=True).supported
+    assert reading.kind == "environment" and reading.supported and reading.rotated_image is None
+    assert "(remapped)" in reading.note
+    assert scene_data.read_world(scene).supported
     _rig(scene, tmp_path, count=8)
     # A Location driven by other nodes: its own value stands in, for both.
     combine = tree.nodes.new("ShaderNodeCombineXYZ")
     tree.links.new(combine.outputs[0], mapping.inputs["Location"])
-    reading = world.read_scene(scene, weighted_sum=True)
+    reading = world.read_scene(scene)
     assert f"the Location of '{mapping.name}' comes from a Combine XYZ node" in reading.note
     _refused(scene, tmp_path, "cannot be used as it is wired", "the Location of 'Mapping'", "Source file")
     tree.links.remove(mapping.inputs["Location"].links[0])
@@ -329,7 +328,7 @@ def test_what_only_a_rotation_reader_or_no_reader_can_take_is_reported(addon, tm
     # A uniform scale changes nothing (the lookup drops the length).
     mapping.inputs["Location"].default_value = (0.0, 0.0, 0.0)
     mapping.inputs["Scale"].default_value = (2.0, 2.0, 2.0)
-    assert world.read_scene(scene).supported
+    assert world.read_scene(scene).supported and world.read_scene(scene).rotated_image is not None
     # A Mapping whose own Vector is unconnected looks up one direction.
     tree.links.remove(mapping.inputs["Vector"].links[0])
     assert "is not connected, so the map is looked up in one direction" in world.read_scene(scene).note
@@ -437,15 +436,21 @@ def test_a_mapping_location_and_scale_look_the_map_up_where_cycles_does(addon, t
         env.projection = "MIRROR_BALL"
     h, w_ = 64, 128
     rendered = _panorama(scene, tmp_path, f"{case}_render", h, w_)
-    reading = world.read_scene(scene, weighted_sum=True)
+    reading = world.read_scene(scene)
     assert reading.supported and reading.rotated_image is None, reading.note
     values = [world.image_pixels(term.image) for term in reading.terms]
     got = world.environment_radiance(reading.terms, values, w_)
     assert got.shape == (h, w_, 3)
     assert _relative_error(got, rendered) < 0.015, _relative_error(got, rendered)
+    # The SH lighting projects the same remapped World: the SH of Cycles' panorama.
+    expected = _core().sh.project_environment(ORDER, rendered)
+    sh_error = np.abs(_sh(scene) - expected).max() / np.abs(expected).max()
+    assert sh_error < 0.01, sh_error
     # The remap matters: the plain map is far from it.
     if case != "mirror_ball":
         assert _relative_error(pixels, rendered) > 0.1
+        plain = _core().sh.project_environment(ORDER, pixels)
+        assert np.abs(plain - expected).max() / np.abs(expected).max() > 5 * sh_error
 
 
 def _remapped_light(pixels, remap):
@@ -495,7 +500,7 @@ def test_a_uniform_scale_changes_nothing_and_others_bend_or_mirror_the_map(addon
     plain = _rig(scene, tmp_path, name="plain.json")
     scale = w.node_tree.nodes["Mapping"].inputs["Scale"]
     scale.default_value = (2.0, 2.0, 2.0)
-    assert world.read_scene(scene, weighted_sum=True).rotated_image is not None
+    assert world.read_scene(scene).rotated_image is not None
     uniform = _rig(scene, tmp_path, name="uniform.json")
     np.testing.assert_allclose(uniform[0], plain[0], atol=1e-9)
     np.testing.assert_allclose(uniform[1], plain[1], rtol=1e-9)
@@ -575,15 +580,17 @@ def test_a_background_mixed_with_a_constant_colour_lights_as_their_weighted_sum(
     node = _combine(tree, idname, tree.nodes["Background"], _constant_background(tree, colour, 1.5))
     if idname == "ShaderNodeMixShader":
         node.inputs["Fac"].default_value = 0.3
-    reading = world.read_scene(scene, weighted_sum=True)
+    reading = world.read_scene(scene)
     assert reading.supported and [t.weight for t in reading.terms] == pytest.approx(shares)
     directions, rgb = _rig(scene, tmp_path, count=16)
     total = (summed * _solid_angles(*pixels.shape[:2])[:, None, None]).sum(axis=(0, 1))
     np.testing.assert_allclose(rgb.sum(axis=0), total, rtol=3e-3)
     np.testing.assert_allclose(from_file[1].sum(axis=0), total, rtol=1e-4)
     assert _angle(_rig_moment(directions, rgb), _rig_moment(*from_file)) < 1.0
-    # The SH lighting takes one Background: it says so.
-    assert "adds 2 Backgrounds" in scene_data.read_world(scene).note
+    # The SH lighting is the SH of the same sum.
+    expected = _core().sh.project_environment(ORDER, summed.astype(np.float32))
+    assert scene_data.read_world(scene).supported
+    np.testing.assert_allclose(_sh(scene), expected, rtol=0, atol=1e-3 * np.abs(expected).max())
 
 
 def _plane_lit(scene, tmp_path, name):
@@ -626,7 +633,7 @@ def test_is_camera_ray_lights_with_one_background_and_shows_the_camera_the_other
     mix = _combine(tree, "ShaderNodeMixShader", tree.nodes["Background"], white)
     light_path = tree.nodes.new("ShaderNodeLightPath")
     tree.links.new(light_path.outputs["Is Camera Ray"], mix.inputs["Fac"])
-    reading = world.read_scene(scene, weighted_sum=True)
+    reading = world.read_scene(scene)
     assert reading.supported and len(reading.terms) == 1 and "to the camera only" in reading.note
     # Blender's own evaluation first (no rig in the scene yet): the plane lit
     # by the World gets the rig's irradiance Σ rgb·max(0, d_z).
@@ -657,7 +664,8 @@ def test_is_camera_ray_lights_with_one_background_and_shows_the_camera_the_other
 def test_a_mirror_ball_world_is_decomposed_as_a_mirror_ball(addon, tmp_path):
     """Cycles' direction_to_mirrorball and the core's mirror_ball mapping are
     the same for a square image (a ball seen along +Y): the World's projection
-    picks the rig's mapping. The SH projection takes latlong maps only."""
+    picks the rig's mapping, and the SH lighting (the ball resampled onto a
+    latlong grid, then projected) carries the rig's light in its direction."""
     scene = addon
     pixels = np.full((64, 64, 3), 0.05, np.float32)
     pixels[18:24, 40:46] = 50.0
@@ -670,8 +678,11 @@ def test_a_mirror_ball_world_is_decomposed_as_a_mirror_ball(addon, tmp_path):
                                             json_path=json_path) == {"FINISHED"}
     lights = json.load(open(json_path))["frames"][0]["lights"]
     np.testing.assert_allclose(from_world[0], [l["direction"] for l in lights], atol=1e-6)
-    reading = scene_data.read_world(scene)
-    assert reading.kind == "uniform" and "Mirror Ball projection" in reading.note
+    assert scene_data.read_world(scene).supported
+    lighting = _sh(scene)
+    directions, rgb = np.array([l["direction"] for l in lights]), np.array([l["rgb"] for l in lights])
+    np.testing.assert_allclose(lighting[0] * math.sqrt(4 * math.pi), rgb.sum(axis=0), rtol=0.02)
+    assert _angle(_sh_moment(lighting), _rig_moment(directions, rgb)) < 2.0
 
 
 # Colour ----------------------------------------------------------------------------------

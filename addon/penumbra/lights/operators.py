@@ -140,7 +140,7 @@ class _Job:
         pixels go to self.array, in the working space (path ''). A World that
         is more than one image seen through a rotation goes to self.world_sum,
         which hands over its light summed on a latlong grid (path '')."""
-        reading = world.read_scene(self.scene, weighted_sum=True)
+        reading = world.read_scene(self.scene)
         if reading.kind != "environment":
             raise ValueError(f"no source file given, and the World is not lit by an image ({reading.note}): "
                              "connect an Environment Texture with an image to the Background at the active "
