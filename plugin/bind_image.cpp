@@ -161,6 +161,8 @@ void bind_image(py::module_& m) {
     m.def("read_frames", &read_frames, py::arg("path"), py::arg("kind") = FrameSourceKind::automatic,
           py::arg("start") = 0, py::arg("count") = -1,
     "Reads frames of an image, a numbered sequence or a video: (list of (H, W, 3) arrays, frames per second).");
+
+    bind_image_environment(m);
 }
 
 }  // namespace penumbra::bindings

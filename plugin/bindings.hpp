@@ -8,7 +8,8 @@
 
 namespace penumbra::bindings {
 
-void bind_image(pybind11::module_& image);  // image and video I/O, frame sources
+void bind_image(pybind11::module_& image);  // image and video I/O, frame sources; calls the one below
+void bind_image_environment(pybind11::module_& image);  // Environment Textures looked up, the World resampled
 void bind_color(pybind11::module_& color);  // OpenColorIO configs
 
 void bind_sh(pybind11::module_& sh);            // basis, zonal, rotation, projection

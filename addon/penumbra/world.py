@@ -55,6 +55,7 @@ import os
 
 import numpy as np
 
+from . import native
 from .compat import uses_nodes
 
 # How far a walk may go (reroutes, groups) before the tree is declared cyclic.
@@ -147,17 +148,12 @@ class BackgroundTerm:
         self.source = "uniform Background colour"
 
 
-def _safe_normalize(v):
-    """v / |v| along the last axis, 0 where v = 0 (Cycles' safe_normalize)."""
-    length = np.linalg.norm(v, axis=-1, keepdims=True)
-    return np.divide(v, length, out=np.zeros_like(v), where=length > 0.0)
-
-
 class DirectionLookup:
     """Where an Environment Texture is looked up for the view direction d, as
     Cycles evaluates its Vector: steps x ↦ A·x + b (Mapping, Vector Rotate),
     some followed by a normalization (a NORMAL Mapping), applied to d in
-    order, then m = safe_normalize(x), the texture's own.
+    order, then m = safe_normalize(x), the texture's own (the core applies
+    them: image/environment_lookup.hpp).
 
     steps          [(A, b, normalize)] in the order they act on d
     rotation_part  the product of the steps' rotations: m = rotation_part·d
@@ -182,16 +178,6 @@ class DirectionLookup:
         self.steps.insert(0, step)
         self.rotation_part = self.rotation_part @ rotation
         self.warps.extend(warps)
-
-    def __call__(self, directions):
-        """(..., 3) lookup directions m for view directions d: unit, or 0
-        where the Vector comes out 0."""
-        x = np.asarray(directions, dtype=np.float64)
-        for a, b, normalize in self.steps:
-            x = x @ a.T + b
-            if normalize:
-                x = _safe_normalize(x)
-        return _safe_normalize(x)
 
 
 def engine_target(engine):
@@ -571,7 +557,7 @@ def _vector_lookup(socket, path, r):
 
 # The lit World on a grid ---------------------------------------------------------------
 
-def environment_radiance(terms, values, width, supersampling=2, band_rows=16):
+def environment_radiance(terms, values, width, supersampling=2):
     """(width/2, width, 3) float32: the lit World Σ weight·strength·value(m)
     over `terms`, on an equirectangular grid of world directions d
     (core/common/latlong.hpp), m = term.lookup(d). Each cell is the
@@ -579,81 +565,17 @@ def environment_radiance(terms, values, width, supersampling=2, band_rows=16):
     resamples a fisheye or a mirror ball. values[i]: term i's colour (3,) or
     its image's pixels (H, W, 3), row 0 = the top, all in the one linear
     space the result is in. Images are looked up as Blender's Environment
-    Texture does (texture_lookup); band_rows rows are evaluated at a time."""
-    height, k = width // 2, supersampling
-    out = np.zeros((height, width, 3), np.float32)
-    offsets = (np.arange(k) + 0.5) / k
-    phi = np.pi - 2.0 * np.pi * (np.arange(width)[:, None] + offsets).ravel() / width
-    images = [(term, _BlenderRows(value)) for term, value in zip(terms, values) if term.kind == "environment"]
-    for top in range(0, height, band_rows):
-        rows = np.arange(top, min(top + band_rows, height))
-        theta = np.pi * (rows[:, None] + offsets).ravel() / height
-        d = np.stack(np.broadcast_arrays(np.sin(theta)[:, None] * np.cos(phi), np.sin(theta)[:, None] * np.sin(phi),
-                                         np.cos(theta)[:, None]), axis=-1)
-        radiance = np.zeros(d.shape, np.float32)
-        for term, image in images:
-            radiance += np.float32(term.weight * term.strength) * image.lookup(
-                term.lookup(d), term.projection, term.interpolation == "Closest")
-        # Sub-rows weighted by their solid angle, ∝ sin θ.
-        weight = np.sin(theta).reshape(len(rows), k).astype(np.float32)
-        samples, cells = radiance.reshape(len(rows), k, width, k, 3), 0.0
-        for i, j in np.ndindex(k, k):
-            cells = cells + weight[:, i, None, None] * samples[:, i, :, j]
-        out[rows] = cells / (k * weight.sum(axis=1))[:, None, None]
+    Texture does (the core's image/environment_lookup.hpp)."""
+    core_terms = []
     for term, value in zip(terms, values):
-        if term.kind != "environment":
-            out += np.float32(term.weight * term.strength) * np.asarray(value, dtype=np.float32)
-    return out
-
-
-def texture_lookup(pixels, m, projection="EQUIRECTANGULAR", closest=False):
-    """(..., 3) colours of an Environment Texture's image (H, W, 3), row 0 =
-    the top, at lookup directions m (unit or 0), as Cycles computes them:
-    direction_to_equirectangular or direction_to_mirrorball
-    (kernel/camera/projection.h) gives (u, v), v = 0 the bottom row; the
-    image repeats on both axes (EnvironmentTextureNode::image_params), looked
-    up bilinearly about pixel centres or, for Closest, at floor(u·W, v·H).
-    Cubic and Smart are looked up bilinearly."""
-    return _BlenderRows(pixels).lookup(m, projection, closest)
-
-
-class _BlenderRows:
-    """An image's pixels as Blender stores them, bottom row first, with one
-    more row and column on every side repeating the opposite edge (the
-    texture repeats), flat: Blender's pixel (row r from the bottom, column c)
-    at (r + 1)·(W + 2) + c + 1."""
-
-    def __init__(self, pixels):
-        self.height, self.width = pixels.shape[:2]
-        bottom_up = np.asarray(pixels, dtype=np.float32)[::-1]
-        padded = np.pad(bottom_up, ((1, 1), (1, 1), (0, 0)), mode="wrap")
-        self.flat = padded.reshape(-1, padded.shape[2])
-
-    def lookup(self, m, projection, closest):
-        h, w, stride = self.height, self.width, self.width + 2
-        if projection == "MIRROR_BALL":
-            # The ball's normal halfway between the view back to the camera
-            # (−y) and m; (u, v) = its x and z, from [−1, 1] to [0, 1].
-            x, y, z = m[..., 0], m[..., 1] - 1.0, m[..., 2]
-            div = 2.0 * np.sqrt(np.maximum(-0.5 * y, 0.0))
-            div = np.where(div > 0.0, div, 1.0)
-            u, v = 0.5 * (x / div + 1.0), 0.5 * (z / div + 1.0)
+        core_term = {"scale": float(term.weight * term.strength)}
+        if term.kind == "environment":
+            core_term.update(pixels=np.asarray(value, dtype=np.float32), projection=term.projection,
+                             closest=term.interpolation == "Closest", steps=term.lookup.steps)
         else:
-            u = 0.5 - np.arctan2(m[..., 1], m[..., 0]) / (2.0 * np.pi)
-            v = 1.0 - np.arccos(np.clip(m[..., 2], -1.0, 1.0)) / np.pi
-        # u, v ∈ [0, 1]: Closest reads columns 0..W, bilinear −1..W (the padding).
-        x, y = (u * w).astype(np.float32), (v * h).astype(np.float32)
-        if closest:
-            column = np.clip(np.floor(x), 0, w) % w
-            row = np.clip(np.floor(y), 0, h) % h
-            return np.take(self.flat, ((row + 1) * stride + column + 1).astype(np.int64), axis=0)
-        x0, y0 = np.clip(np.floor(x - 0.5), -1, w - 1), np.clip(np.floor(y - 0.5), -1, h - 1)
-        fx, fy = (x - 0.5 - x0)[..., None], (y - 0.5 - y0)[..., None]
-        corner = ((y0 + 1) * stride + x0 + 1).astype(np.int64)
-        below = (1.0 - fx) * np.take(self.flat, corner, axis=0) + fx * np.take(self.flat, corner + 1, axis=0)
-        above = (1.0 - fx) * np.take(self.flat, corner + stride, axis=0) + fx * np.take(self.flat, corner + stride + 1,
-                                                                                         axis=0)
-        return (1.0 - fy) * below + fy * above
+            core_term["colour"] = np.asarray(value, dtype=np.float64)
+        core_terms.append(core_term)
+    return native.require().image.environment_radiance(core_terms, int(width), supersampling)
 
 
 # Pixels ------------------------------------------------------------------------------
