@@ -329,8 +329,8 @@ def timing_lines(r):
     a = r["accuracy"]
     b = a["bake_breakdown"]
     lines = [f"{ROUNDS} rounds, alternated: Penumbra's bake of the {r['training_frames']} training frames as the "
-             "operator bakes them, then the fit, then Cycles' AO bake of the next slice of the same frames (every "
-             f"{ROUNDS}th frame, interleaved); the ratio is the mean bake + fit over Cycles' time for all of them. "
+             "operator bakes them, then the fit, then Cycles' AO bake of the next slice of the same frames (one in "
+             f"{ROUNDS}, interleaved); the ratio is the mean bake + fit over Cycles' time for all of them. "
              "1-minute load average before the bake, before Cycles and after.", "",
              "| round | bake s | fit s (ZH, linear) | Cycles s (frames) | round's ratio | load |",
              "|---:|---:|---:|---:|---:|---|"]
