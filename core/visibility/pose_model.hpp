@@ -88,8 +88,11 @@ struct FitSettings {
     // ... and of each (vertex, frame) fit, which starts from the reference
     // axes: on the humanoid (docs/visibility-humanoid-benchmark.md) 2 fit the
     // frames as well as 8 (ZH sh error +2 %), give a held-out model error no
-    // worse, and take a quarter of the time of this, the fit's largest step.
-    int frame_zh_iterations = 2;
+    // worse, and take a quarter of the time of this, the fit's largest step;
+    // 1 against 2: ZH sh error +2 % again, held-out model error lower on the
+    // humanoid (AO 0.0149 vs 0.0152) and the test character (0.00308 vs
+    // 0.00310), a third less time (docs/visibility.md).
+    int frame_zh_iterations = 1;
     double axis_prior = 1.0;     // see zh_fit.hpp; 1 measured best for the linear model (docs/visibility.md)
     int threads = 0;
 };
