@@ -62,8 +62,9 @@ void validate(const TriangleMesh& mesh, std::size_t index) {
 
 }  // namespace
 
-OcclusionScene::OcclusionScene(const std::vector<const TriangleMesh*>& meshes, SceneBuild build)
+OcclusionScene::OcclusionScene(const std::vector<const TriangleMesh*>& meshes, SceneBuild build, Traversal traversal)
     : impl_(std::make_unique<Impl>()) {
+    if (traversal != Traversal::Fast && traversal != Traversal::Robust) throw ArgumentError("unknown traversal");
     for (std::size_t k = 0; k < meshes.size(); ++k) validate(*meshes[k], k);
     impl_->device = shared_device();
     if (!impl_->device) throw Error("Embree could not create a device (rtcNewDevice failed)");
@@ -80,10 +81,9 @@ OcclusionScene::OcclusionScene(const std::vector<const TriangleMesh*>& meshes, S
         check_device(impl_->device, "creating a scene");
         throw Error("Embree could not create a scene");
     }
-    // Robust traversal: rays start a hair above the surface, where a
-    // non-robust test can slip between two triangles of a crease.
-    rtcSetSceneFlags(impl_->scene, build == SceneBuild::Low ? RTCSceneFlags(RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_DYNAMIC)
-                                                            : RTC_SCENE_FLAG_ROBUST);
+    const int flags = (traversal == Traversal::Robust ? RTC_SCENE_FLAG_ROBUST : 0) |
+                      (build == SceneBuild::Low ? RTC_SCENE_FLAG_DYNAMIC : 0);
+    rtcSetSceneFlags(impl_->scene, RTCSceneFlags(flags));
     rtcSetSceneBuildQuality(impl_->scene, build == SceneBuild::High  ? RTC_BUILD_QUALITY_HIGH
                                           : build == SceneBuild::Low ? RTC_BUILD_QUALITY_LOW
                                                                      : RTC_BUILD_QUALITY_MEDIUM);
@@ -145,6 +145,37 @@ int OcclusionScene::packet_width() const { return impl_->width; }
 
 namespace {
 
+// Casts rays [0, count) (count <= W) as one packet: lane i from origin(i)
+// along direction(i); writes occluded[i].
+template <int W, typename Packet, typename Origin, typename Direction>
+void cast_lanes(RTCScene scene, RTCIntersectContext& context, const Origin& origin, const Direction& direction,
+                int count, float t_near, float t_far, std::uint8_t* occluded,
+                void (*occluded_fn)(const int*, RTCScene, RTCIntersectContext*, Packet*)) {
+    alignas(64) Packet packet;
+    alignas(64) int valid[W];
+    for (int i = 0; i < W; ++i) {
+        const bool live = i < count;
+        valid[i] = live ? -1 : 0;
+        const Eigen::Vector3f& o = origin(live ? i : 0);
+        const Eigen::Vector3f& d = direction(live ? i : 0);
+        packet.org_x[i] = o.x();
+        packet.org_y[i] = o.y();
+        packet.org_z[i] = o.z();
+        packet.dir_x[i] = d.x();
+        packet.dir_y[i] = d.y();
+        packet.dir_z[i] = d.z();
+        packet.tnear[i] = t_near;
+        packet.tfar[i] = t_far;
+        packet.time[i] = 0.0f;
+        packet.mask[i] = 0xFFFFFFFFu;
+        packet.id[i] = 0;
+        packet.flags[i] = 0;
+    }
+    occluded_fn(valid, scene, &context, &packet);
+    // Embree sets tfar to −inf for an occluded ray.
+    for (int i = 0; i < count; ++i) occluded[i] = packet.tfar[i] < 0.0f ? 1 : 0;
+}
+
 template <int W, typename Packet>
 void cast_packet(RTCScene scene, const Eigen::Vector3f& origin, const Eigen::Vector3f* directions, int count,
                  float t_near, float t_far, std::uint8_t* occluded,
@@ -152,31 +183,22 @@ void cast_packet(RTCScene scene, const Eigen::Vector3f& origin, const Eigen::Vec
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    for (int start = 0; start < count; start += W) {
-        alignas(64) Packet packet;
-        alignas(64) int valid[W];
-        const int n = std::min(W, count - start);
-        for (int i = 0; i < W; ++i) {
-            const bool live = i < n;
-            valid[i] = live ? -1 : 0;
-            const Eigen::Vector3f& d = directions[start + (live ? i : 0)];
-            packet.org_x[i] = origin.x();
-            packet.org_y[i] = origin.y();
-            packet.org_z[i] = origin.z();
-            packet.dir_x[i] = d.x();
-            packet.dir_y[i] = d.y();
-            packet.dir_z[i] = d.z();
-            packet.tnear[i] = t_near;
-            packet.tfar[i] = t_far;
-            packet.time[i] = 0.0f;
-            packet.mask[i] = 0xFFFFFFFFu;
-            packet.id[i] = 0;
-            packet.flags[i] = 0;
-        }
-        occluded_fn(valid, scene, &context, &packet);
-        // Embree sets tfar to −inf for an occluded ray.
-        for (int i = 0; i < n; ++i) occluded[start + i] = packet.tfar[i] < 0.0f ? 1 : 0;
-    }
+    for (int start = 0; start < count; start += W)
+        cast_lanes<W>(scene, context, [&](int) -> const Eigen::Vector3f& { return origin; },
+                      [&](int i) -> const Eigen::Vector3f& { return directions[start + i]; },
+                      std::min(W, count - start), t_near, t_far, occluded + start, occluded_fn);
+}
+
+template <int W, typename Packet>
+void cast_rays(RTCScene scene, const Eigen::Vector3f* origins, const Eigen::Vector3f* directions, int count,
+               float t_near, float t_far, std::uint8_t* occluded,
+               void (*occluded_fn)(const int*, RTCScene, RTCIntersectContext*, Packet*)) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    cast_lanes<W>(scene, context, [&](int i) -> const Eigen::Vector3f& { return origins[i]; },
+                  [&](int i) -> const Eigen::Vector3f& { return directions[i]; }, count, t_near, t_far, occluded,
+                  occluded_fn);
 }
 
 }  // namespace
@@ -189,6 +211,21 @@ void OcclusionScene::occluded_bundle(const Eigen::Vector3f& origin, const Eigen:
         case 4: cast_packet<4, RTCRay4>(impl_->scene, origin, directions, count, t_near, t_far, occluded, rtcOccluded4); return;
         default:
             for (int i = 0; i < count; ++i) occluded[i] = occluded1(origin, directions[i], t_near, t_far) ? 1 : 0;
+    }
+}
+
+void OcclusionScene::occluded_packet(const Eigen::Vector3f* origins, const Eigen::Vector3f* directions, int count,
+                                     float t_near, float t_far, std::uint8_t* occluded, int width) const {
+    if (width == 0) width = impl_->width;
+    if (count < 0 || count > width) throw ArgumentError("a packet holds 0.." + std::to_string(width) + " rays");
+    switch (width) {
+        case 16: cast_rays<16, RTCRay16>(impl_->scene, origins, directions, count, t_near, t_far, occluded, rtcOccluded16); return;
+        case 8: cast_rays<8, RTCRay8>(impl_->scene, origins, directions, count, t_near, t_far, occluded, rtcOccluded8); return;
+        case 4: cast_rays<4, RTCRay4>(impl_->scene, origins, directions, count, t_near, t_far, occluded, rtcOccluded4); return;
+        case 1:
+            for (int i = 0; i < count; ++i) occluded[i] = occluded1(origins[i], directions[i], t_near, t_far) ? 1 : 0;
+            return;
+        default: throw ArgumentError("packet width must be 0 (native), 1, 4, 8 or 16");
     }
 }
 

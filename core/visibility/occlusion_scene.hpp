@@ -29,6 +29,14 @@ struct TriangleMesh {
 // away from the first frame). Measured in docs/visibility-benchmark.md.
 enum class SceneBuild : std::uint32_t { High = 0, Medium = 1, Low = 2, Refit = 3 };
 
+// Embree's arithmetic. Robust (RTC_SCENE_FLAG_ROBUST) makes the box tests
+// conservative and the triangle test watertight, so that no ray slips
+// between two triangles sharing an edge; Fast is Embree's default. Measured
+// on the humanoid (48 frames × 9,914 vertices × 64 rays from just above the
+// skin, docs/visibility.md): the same visibility bit for bit, cast about
+// 20 % faster with Fast. A leak would turn one of a vertex's rays visible.
+enum class Traversal : std::uint32_t { Fast = 0, Robust = 1 };
+
 // A committed Embree scene on the process-wide device (created on first use
 // and kept: creating a device starts Embree's threads, milliseconds each
 // time). Thread-safe for queries once built.
@@ -37,7 +45,8 @@ enum class SceneBuild : std::uint32_t { High = 0, Medium = 1, Low = 2, Refit = 3
 // kept (Embree never reports a hit on them).
 class OcclusionScene {
 public:
-    explicit OcclusionScene(const std::vector<const TriangleMesh*>& meshes, SceneBuild build = SceneBuild::Medium);
+    explicit OcclusionScene(const std::vector<const TriangleMesh*>& meshes, SceneBuild build = SceneBuild::Medium,
+                            Traversal traversal = Traversal::Fast);
     ~OcclusionScene();
     OcclusionScene(const OcclusionScene&) = delete;
     OcclusionScene& operator=(const OcclusionScene&) = delete;
@@ -51,6 +60,16 @@ public:
     // (docs/visibility-benchmark.md).
     void occluded_bundle(const Eigen::Vector3f& origin, const Eigen::Vector3f* directions, int count,
                          float t_near, float t_far, std::uint8_t* occluded, bool use_packets = false) const;
+
+    // Rays each from its own origin (count <= width), cast as one packet of
+    // `width` lanes (rtcOccluded16/8/4; 1: one by one; 0: packet_width()).
+    // Writes occluded[i] like occluded_bundle. For coherent rays (nearby
+    // origins, nearly parallel directions): the same ray of neighbouring
+    // vertices, which bench/cpp/visibility_bake_bench.cpp casts this way.
+    // The bake does not: on the humanoid it measured slower than single rays,
+    // even with every lane given the same direction (docs/visibility.md).
+    void occluded_packet(const Eigen::Vector3f* origins, const Eigen::Vector3f* directions, int count, float t_near,
+                         float t_far, std::uint8_t* occluded, int width = 0) const;
 
     // The next frame of the same meshes: when their number, vertex counts and
     // triangles equal the scene's, copies the new positions into the

@@ -4,19 +4,21 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <mutex>
 #include <numbers>
 #include <numeric>
 #include <string>
+#include <string_view>
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
 
 #include "common/error.hpp"
-#include "common/hash.hpp"
 #include "sh/brdf_operator.hpp"
 #include "common/parallel.hpp"
+#include "visibility/ridge_curve.hpp"
 
 namespace penumbra::visibility {
 
@@ -36,19 +38,26 @@ Eigen::Matrix3d to_matrix(const float* r) {
 struct ErrorSums {
     double sq = 0.0, ao_abs = 0.0, ao_max = 0.0;
     std::size_t n = 0;
-    void add(int order, const double* predicted, const float* truth) {
+    // One (vertex, frame) pair's terms: |Δv|²/4π and |Δ AO|.
+    struct Sample {
+        double sq, ao;
+    };
+    static Sample sample(int order, const double* predicted, const float* truth) {
         double diff[64], d2 = 0.0;
         const int n_sh = order * order;
         for (int i = 0; i < n_sh; ++i) {
             diff[i] = predicted[i] - double(truth[i]);
             d2 += diff[i] * diff[i];
         }
-        sq += d2 / (4.0 * std::numbers::pi);
-        const double ao = std::abs(ambient_occlusion(order, diff));
-        ao_abs += ao;
-        ao_max = std::max(ao_max, ao);
+        return {d2 / (4.0 * std::numbers::pi), std::abs(ambient_occlusion(order, diff))};
+    }
+    void add(const Sample& e) {
+        sq += e.sq;
+        ao_abs += e.ao;
+        ao_max = std::max(ao_max, e.ao);
         ++n;
     }
+    void add(int order, const double* predicted, const float* truth) { add(sample(order, predicted, truth)); }
     void merge(const ErrorSums& o) {
         sq += o.sq;
         ao_abs += o.ao_abs;
@@ -67,8 +76,13 @@ struct ErrorSums {
     }
 };
 
+// ρ from 1e-8 to 10, four steps a decade: each costs O(r²) (ridge_curve.hpp).
 const std::vector<double>& ridge_grid() {
-    static const std::vector<double> grid{1e-8, 1e-6, 1e-5, 1e-4, 1e-3, 3e-3, 1e-2, 3e-2, 1e-1, 3e-1, 1.0, 10.0};
+    static const std::vector<double> grid = [] {
+        std::vector<double> g;
+        for (int i = 0; i <= 36; ++i) g.push_back(std::pow(10.0, -8.0 + 0.25 * i));
+        return g;
+    }();
     return grid;
 }
 
@@ -217,6 +231,7 @@ Eigen::MatrixXf fit_frame_lobes(const TrainingSet& set, const FitSettings& setti
         ErrorSums local;
         std::vector<double> mean(n_sh), sh(n_sh), ref(d), params(d), fitted(n_sh);
         std::vector<std::uint64_t> hashes(F);
+        std::vector<ErrorSums::Sample> samples(F);
         for (std::size_t v = begin; v < end; ++v) {
             std::fill(mean.begin(), mean.end(), 0.0);
             for (const auto& frame : set.frames)
@@ -229,18 +244,20 @@ Eigen::MatrixXf fit_frame_lobes(const TrainingSet& set, const FitSettings& setti
                 // between two poses (over half the (vertex, frame) pairs of
                 // the humanoid at 128 rays): the fit, a function of the SH
                 // vector and the reference alone, is then copied, not redone.
-                hashes[f] = fnv1a64(truth, sizeof(float) * n_sh);
+                hashes[f] = std::hash<std::string_view>{}(
+                    std::string_view(reinterpret_cast<const char*>(truth), sizeof(float) * n_sh));
                 const std::size_t same = earlier_equal(set, v, n_sh, f, hashes);
-                if (same < f) {
+                if (same < f) {  // so are its lobes' errors
                     for (int i = 0; i < d; ++i) B(f, v * d + i) = B(same, v * d + i);
-                    for (int i = 0; i < d; ++i) params[i] = B(same, v * d + i);
+                    samples[f] = samples[same];
                 } else {
                     for (int i = 0; i < n_sh; ++i) sh[i] = truth[i];
                     fit_zh_lobes(zs_frame, sh.data(), ref.data(), params.data());
                     for (int i = 0; i < d; ++i) B(f, v * d + i) = float(params[i]);
+                    lobes_to_sh(order, shape.lobes, params.data(), fitted.data());
+                    samples[f] = ErrorSums::sample(order, fitted.data(), truth);
                 }
-                lobes_to_sh(order, shape.lobes, params.data(), fitted.data());
-                local.add(order, fitted.data(), truth);
+                local.add(samples[f]);
             }
         }
         std::lock_guard<std::mutex> lock(merge_mutex);
@@ -263,6 +280,18 @@ Eigen::MatrixXd pose_matrix(const TrainingSet& set, const std::vector<std::size_
     return A;
 }
 
+// left · right for a wide right (V·d columns), its columns split across
+// threads: Eigen's product alone runs on one.
+Eigen::MatrixXf wide_product(const Eigen::MatrixXf& left, const Eigen::MatrixXf& right, int threads) {
+    Eigen::MatrixXf out(left.rows(), right.cols());
+    parallel_for(std::size_t(right.cols()), {threads, 4096, "visibility.wide_product"}, [&](std::size_t begin,
+                                                                                           std::size_t end) {
+        const Eigen::Index b = Eigen::Index(begin), n = Eigen::Index(end - begin);
+        out.middleCols(b, n).noalias() = left * right.middleCols(b, n);
+    });
+    return out;
+}
+
 // The ridge solution's pieces for a subset of frames: feature and lobe
 // parameter means, and the centred SVD A_c = U S Vᵀ with Uᵀ·B_c.
 struct RidgeSolver {
@@ -281,7 +310,9 @@ struct RidgeSolver {
         return w;
     }
     // W = V·diag(s/(s²+λ))·Uᵀ·B_c (k × V·d).
-    Eigen::MatrixXf weights(double rho) const { return (V * shrink(rho).asDiagonal()).cast<float>() * ut_b; }
+    Eigen::MatrixXf weights(double rho, int threads) const {
+        return wide_product((V * shrink(rho).asDiagonal()).cast<float>(), ut_b, threads);
+    }
 };
 
 // A model as stored, per vertex: the joints kept (none: a constant vertex)
@@ -301,11 +332,12 @@ public:
     RidgeSolver solver(const std::vector<std::size_t>& rows) const;
     // Errors of lobe parameters predicted for `rows` (rows.size() × V·d) against their baked SH.
     Errors predicted_errors(const std::vector<std::size_t>& rows, const Eigen::MatrixXf& predicted) const;
-    // Per vertex: constant, or the joints that matter. `rows` are the frames
-    // the solver was fitted on; W its ridge weights (k × V·d). Adds the
-    // pruned model's errors on `rows` to `errors`.
+    // Per vertex: constant, or the joints that matter (decided on `rows`,
+    // the frames the solver was fitted on, or given as `decided`), and the
+    // bias. W: the solver's ridge weights (k × V·d).
     PrunedModel prune(const std::vector<std::size_t>& rows, const RidgeSolver& sol, const Eigen::MatrixXf& W,
-                      ErrorSums& errors, const Progress& progress, double from, double to) const;
+                      const std::vector<std::vector<std::uint16_t>>* decided, const Progress& progress, double from,
+                      double to) const;
     // Errors of a pruned model (as stored) on frames it was not fitted on.
     Errors pruned_errors(const PrunedModel& pruned, const Eigen::MatrixXf& W,
                          const std::vector<std::size_t>& rows) const;
@@ -313,16 +345,13 @@ public:
 private:
     // Scratch of one pruning worker.
     struct PruneScratch {
-        Eigen::MatrixXd dropped, trial, prediction;
+        Eigen::MatrixXd dropped, trial;
         std::vector<Eigen::MatrixXd> parts;
         std::vector<std::pair<double, std::size_t>> norms;
-        std::vector<double> params, sh;
     };
     void prune_vertex(std::size_t v, const std::vector<std::size_t>& rows, const RidgeSolver& sol,
                       const Eigen::MatrixXf& W, const Eigen::MatrixXd& Ac, PruneScratch& scratch,
-                      PrunedModel& out) const;
-    void add_errors(const std::vector<std::size_t>& rows, std::size_t v, PruneScratch& scratch,
-                    ErrorSums& errors) const;
+                      std::vector<std::uint16_t>& keep) const;
 
     const TrainingSet& set_;
     const FitSettings& settings_;
@@ -334,12 +363,10 @@ private:
 RidgeSolver LinearFit::solver(const std::vector<std::size_t>& rows) const {
     const std::size_t k = shape_.k;
     RidgeSolver sol;
-    Eigen::MatrixXd a(rows.size(), k);
-    Eigen::MatrixXf b(rows.size(), shape_.V * shape_.d);
-    for (std::size_t r = 0; r < rows.size(); ++r) {
-        a.row(r) = A_.row(rows[r]);
-        b.row(r) = B_.row(rows[r]);
-    }
+    // Gathered column by column (B is column-major, F × V·d): a row at a time
+    // would stride through all of it once per frame.
+    Eigen::MatrixXd a = A_(rows, Eigen::all);
+    Eigen::MatrixXf b = B_(rows, Eigen::all);
     sol.feature_mean = a.colwise().mean().transpose();
     sol.b_mean = b.colwise().mean();
     if (k == 0) return sol;
@@ -350,7 +377,7 @@ RidgeSolver LinearFit::solver(const std::vector<std::size_t>& rows) const {
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
     sol.s = svd.singularValues();
     sol.V = svd.matrixV();
-    sol.ut_b = svd.matrixU().transpose().cast<float>() * b;
+    sol.ut_b = wide_product(svd.matrixU().transpose().cast<float>(), b, settings_.threads);
     return sol;
 }
 
@@ -374,23 +401,12 @@ Errors LinearFit::predicted_errors(const std::vector<std::size_t>& rows, const E
     return total.result();
 }
 
-// Adds the errors of scratch.prediction (vertex v on `rows`) to `errors`.
-void LinearFit::add_errors(const std::vector<std::size_t>& rows, std::size_t v, PruneScratch& scratch,
-                           ErrorSums& errors) const {
-    for (std::size_t r = 0; r < rows.size(); ++r) {
-        for (int i = 0; i < shape_.d; ++i) scratch.params[i] = scratch.prediction(r, i);
-        lobes_to_sh(shape_.order, shape_.lobes, scratch.params.data(), scratch.sh.data());
-        errors.add(shape_.order, scratch.sh.data(), set_.frames[rows[r]].visibility.data() + v * shape_.n_sh);
-    }
-}
-
 // One vertex: constant when its parameters vary less than
 // constant_tolerance (RMS); otherwise its joints' contributions, smallest
 // first, are dropped while the dropped part stays under prune_tolerance.
-// Leaves the kept part's prediction on `rows` in scratch.prediction.
 void LinearFit::prune_vertex(std::size_t v, const std::vector<std::size_t>& rows, const RidgeSolver& sol,
                              const Eigen::MatrixXf& W, const Eigen::MatrixXd& Ac, PruneScratch& scratch,
-                             PrunedModel& out) const {
+                             std::vector<std::uint16_t>& keep) const {
     const std::size_t R = rows.size(), n_active = scratch.parts.size();
     const int d = shape_.d, fpj = shape_.fpj;
     const Eigen::RowVectorXd mean = sol.b_mean.segment(v * d, d).cast<double>();
@@ -398,8 +414,6 @@ void LinearFit::prune_vertex(std::size_t v, const std::vector<std::size_t>& rows
     for (std::size_t r = 0; r < R; ++r)
         for (int i = 0; i < d; ++i) variation += std::pow(double(B_(rows[r], v * d + i)) - mean[i], 2);
     variation = std::sqrt(variation / double(R * d));
-    std::vector<std::uint16_t>& keep = out.kept[v];
-    scratch.prediction = mean.replicate(R, 1);
     if (shape_.k && variation > settings_.constant_tolerance) {
         const Eigen::MatrixXd Wv = W.middleCols(v * d, d).cast<double>();
         for (std::size_t j = 0; j < n_active; ++j) {
@@ -416,38 +430,32 @@ void LinearFit::prune_vertex(std::size_t v, const std::vector<std::size_t>& rows
         }
         for (std::size_t e = first_kept; e < n_active; ++e) keep.push_back(std::uint16_t(scratch.norms[e].second));
         std::sort(keep.begin(), keep.end());
-        for (auto j : keep) scratch.prediction += scratch.parts[j];
     }
-    // Bias with the feature means folded in: params = bias + Σ φ_j W_j.
-    Eigen::RowVectorXd bias = mean;
-    for (auto j : keep)
-        bias -= sol.feature_mean.segment(j * fpj, fpj).transpose() * W.block(j * fpj, v * d, fpj, d).cast<double>();
-    for (int i = 0; i < d; ++i) out.bias[v * d + i] = float(bias[i]);
 }
 
 PrunedModel LinearFit::prune(const std::vector<std::size_t>& rows, const RidgeSolver& sol, const Eigen::MatrixXf& W,
-                             ErrorSums& errors, const Progress& progress, double from, double to) const {
+                             const std::vector<std::vector<std::uint16_t>>* decided, const Progress& progress,
+                             double from, double to) const {
     const std::size_t R = rows.size(), n_active = shape_.k / shape_.fpj;
+    const int d = shape_.d, fpj = shape_.fpj;
     PrunedModel out;
-    out.kept.resize(shape_.V);
-    out.bias.assign(shape_.V * shape_.d, 0.0f);
+    out.kept = decided ? *decided : std::vector<std::vector<std::uint16_t>>(shape_.V);
+    out.bias.assign(shape_.V * d, 0.0f);
     Eigen::MatrixXd Ac(R, shape_.k);
     for (std::size_t r = 0; r < R; ++r) Ac.row(r) = A_.row(rows[r]);
     if (shape_.k) Ac.rowwise() -= sol.feature_mean.transpose();
-    std::mutex merge_mutex;
     parallel_for(shape_.V, {settings_.threads, 64, "visibility.prune", from, to}, [&](std::size_t begin,
                                                                                      std::size_t end) {
-        ErrorSums local;
-        PruneScratch scratch{Eigen::MatrixXd(R, shape_.d), Eigen::MatrixXd(R, shape_.d),
-                             Eigen::MatrixXd(R, shape_.d), std::vector<Eigen::MatrixXd>(n_active),
-                             std::vector<std::pair<double, std::size_t>>(n_active),
-                             std::vector<double>(shape_.d), std::vector<double>(shape_.n_sh)};
+        PruneScratch scratch{Eigen::MatrixXd(R, d), Eigen::MatrixXd(R, d), std::vector<Eigen::MatrixXd>(n_active),
+                             std::vector<std::pair<double, std::size_t>>(n_active)};
         for (std::size_t v = begin; v < end; ++v) {
-            prune_vertex(v, rows, sol, W, Ac, scratch, out);
-            add_errors(rows, v, scratch, local);
+            if (!decided) prune_vertex(v, rows, sol, W, Ac, scratch, out.kept[v]);
+            // Bias with the feature means folded in: params = bias + Σ φ_j W_j.
+            Eigen::RowVectorXd bias = sol.b_mean.segment(v * d, d).cast<double>();
+            for (auto j : out.kept[v])
+                bias -= sol.feature_mean.segment(j * fpj, fpj).transpose() * W.block(j * fpj, v * d, fpj, d).cast<double>();
+            for (int i = 0; i < d; ++i) out.bias[v * d + i] = float(bias[i]);
         }
-        std::lock_guard<std::mutex> lock(merge_mutex);
-        errors.merge(local);
     }, progress);
     return out;
 }
@@ -455,23 +463,28 @@ PrunedModel LinearFit::prune(const std::vector<std::size_t>& rows, const RidgeSo
 Errors LinearFit::pruned_errors(const PrunedModel& pruned, const Eigen::MatrixXf& W,
                                 const std::vector<std::size_t>& rows) const {
     const int order = shape_.order, n_sh = shape_.n_sh, d = shape_.d, fpj = shape_.fpj;
+    const Eigen::Index R = Eigen::Index(rows.size());
+    Eigen::MatrixXd features(R, shape_.k);
+    for (Eigen::Index r = 0; r < R; ++r) features.row(r) = A_.row(rows[r]);
     ErrorSums total;
     std::mutex merge_mutex;
     parallel_for(shape_.V, {settings_.threads, 256, "visibility.pruned_errors"}, [&](std::size_t begin,
                                                                                     std::size_t end) {
         ErrorSums local;
-        std::vector<double> params(d), sh(n_sh);
-        for (std::size_t v = begin; v < end; ++v)
-            for (std::size_t r : rows) {
-                for (int i = 0; i < d; ++i) params[i] = pruned.bias[v * d + i];
-                for (auto j : pruned.kept[v])
-                    for (int a = 0; a < fpj; ++a) {
-                        const double phi = A_(r, j * fpj + a);
-                        for (int i = 0; i < d; ++i) params[i] += phi * W(j * fpj + a, v * d + i);
-                    }
-                lobes_to_sh(order, shape_.lobes, params.data(), sh.data());
-                local.add(order, sh.data(), set_.frames[r].visibility.data() + v * n_sh);
+        Eigen::MatrixXd params(R, d);
+        std::vector<double> row(d), sh(n_sh);
+        for (std::size_t v = begin; v < end; ++v) {
+            // params = bias + Σ over kept joints φ_j W_j, every row at once.
+            for (int i = 0; i < d; ++i) params.col(i).setConstant(pruned.bias[v * d + i]);
+            for (auto j : pruned.kept[v])
+                params.noalias() += features.middleCols(j * fpj, fpj) *
+                                    W.block(j * fpj, Eigen::Index(v * d), fpj, d).cast<double>();
+            for (Eigen::Index r = 0; r < R; ++r) {
+                for (int i = 0; i < d; ++i) row[i] = params(r, i);
+                lobes_to_sh(order, shape_.lobes, row.data(), sh.data());
+                local.add(order, sh.data(), set_.frames[rows[r]].visibility.data() + v * n_sh);
             }
+        }
         std::lock_guard<std::mutex> lock(merge_mutex);
         total.merge(local);
     });
@@ -486,39 +499,48 @@ void split_frames(std::size_t F, int stride, std::vector<std::size_t>& train, st
         (use_holdout && f % stride == std::size_t(stride - 1) ? holdout : train).push_back(f);
 }
 
-// Chooses ρ (λ = ρ·s_max²) on the held-out frames from ridge_grid, then
-// measures the model exactly as it is stored (ridge, constant vertices,
-// per-vertex joint pruning), fitted without the held-out frames, on them.
-// Without held-out frames ρ = 1e-4. Progress 0.8 → 0.9.
-double choose_ridge(const LinearFit& fit, const Eigen::MatrixXd& A, const FitShape& shape,
-                    const std::vector<std::size_t>& train, const std::vector<std::size_t>& holdout,
-                    const Progress& progress, FitReport& report) {
+// Chooses ρ (λ = ρ·s_max²) from ridge_grid by the linearized held-out SH
+// error, every ρ from one SVD (ridge_curve.hpp); then measures through SH,
+// on the held-out frames, the ridge solution at that ρ and the model as
+// stored (ridge, constant vertices, per-vertex joint pruning), both fitted
+// without them. The constants and joints kept per vertex are decided there,
+// on the training frames alone, and returned in `kept` for the stored model.
+// Without held-out frames ρ = 1e-4 and `kept` stays empty. Progress 0.8 → 0.9.
+double choose_ridge(const LinearFit& fit, const Eigen::MatrixXd& A, const Eigen::MatrixXf& B, const FitShape& shape,
+                    const std::vector<std::size_t>& train, const std::vector<std::size_t>& holdout, int threads,
+                    const Progress& progress, FitReport& report, std::vector<std::vector<std::uint16_t>>& kept) {
     double rho = 1e-4;
     if (holdout.empty()) return rho;
-    const std::size_t k = shape.k;
+    const std::size_t k = shape.k, H = holdout.size();
     const RidgeSolver sol = fit.solver(train);
-    Eigen::MatrixXd p(holdout.size(), k);
-    for (std::size_t r = 0; r < holdout.size(); ++r) p.row(r) = A.row(holdout[r]) - sol.feature_mean.transpose();
-    const Eigen::MatrixXd pv = k ? Eigen::MatrixXd(p * sol.V) : Eigen::MatrixXd(holdout.size(), 0);
-    double best = std::numeric_limits<double>::infinity();
-    const std::vector<double> grid = k ? ridge_grid() : std::vector<double>{rho};
-    for (std::size_t g = 0; g < grid.size(); ++g) {
-        Eigen::MatrixXf predicted = sol.b_mean.replicate(holdout.size(), 1);
-        if (k) predicted += (pv * sol.shrink(grid[g]).asDiagonal()).cast<float>() * sol.ut_b;
-        const Errors e = fit.predicted_errors(holdout, predicted);
-        report.ridge_curve.emplace_back(grid[g], e.sh_rms);
-        if (e.sh_rms < best) {
-            best = e.sh_rms;
-            rho = grid[g];
-            report.model_holdout_unpruned = e;
-        }
-        progress.report(0.8 + 0.05 * double(g + 1) / double(grid.size()));
+    Eigen::MatrixXd p(H, k);
+    Eigen::MatrixXf residual(H, B.cols());
+    for (std::size_t r = 0; r < H; ++r) {
+        p.row(r) = A.row(holdout[r]) - sol.feature_mean.transpose();
+        residual.row(r) = B.row(holdout[r]) - sol.b_mean;
     }
+    const Eigen::MatrixXd pv = k ? Eigen::MatrixXd(p * sol.V) : Eigen::MatrixXd(H, 0);
+    if (k) {
+        const RidgeCurve curve = ridge_curve(shape.order, shape.lobes, sol.b_mean, pv, sol.ut_b, residual, threads);
+        double best = std::numeric_limits<double>::infinity();
+        for (double g : ridge_grid()) {
+            const double e = curve.rms(sol.shrink(g));
+            report.ridge_curve.emplace_back(g, e);
+            if (e < best) {
+                best = e;
+                rho = g;
+            }
+        }
+    }
+    progress.report(0.82);
+    Eigen::MatrixXf predicted = sol.b_mean.replicate(H, 1);
+    if (k) predicted += wide_product((pv * sol.shrink(rho).asDiagonal()).cast<float>(), sol.ut_b, threads);
+    report.model_holdout_unpruned = fit.predicted_errors(holdout, predicted);
     Eigen::MatrixXf W_train;
-    if (k) W_train = sol.weights(rho);
-    ErrorSums ignored;
-    const PrunedModel pruned_train = fit.prune(train, sol, W_train, ignored, progress, 0.85, 0.9);
+    if (k) W_train = sol.weights(rho, threads);
+    PrunedModel pruned_train = fit.prune(train, sol, W_train, nullptr, progress, 0.85, 0.9);
     report.model_holdout = fit.pruned_errors(pruned_train, W_train, holdout);
+    kept = std::move(pruned_train.kept);
     return rho;
 }
 
@@ -628,19 +650,20 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
     split_frames(shape.F, settings.holdout_stride, train, holdout);
     report.training_frames = shape.F;
     report.holdout_frames = holdout.size();
-    const double rho = choose_ridge(fit, A, shape, train, holdout, progress, report);
+    std::vector<std::vector<std::uint16_t>> kept;
+    const double rho = choose_ridge(fit, A, B, shape, train, holdout, settings.threads, progress, report, kept);
     report.ridge_relative = rho;
     std::vector<std::size_t> all(shape.F);
     std::iota(all.begin(), all.end(), std::size_t(0));
     const RidgeSolver sol = fit.solver(all);
     Eigen::MatrixXf W;
-    if (shape.k) W = sol.weights(rho);
+    if (shape.k) W = sol.weights(rho, settings.threads);
 
-    // Pruned, as stored.
+    // Pruned, as stored: with the joints decided without the held-out
+    // frames (what model_holdout measured), or on every frame when none.
     PoseModel model;
-    ErrorSums train_errors;
-    PrunedModel pruned = fit.prune(all, sol, W, train_errors, progress, 0.9, 1.0);
-    report.model_training = train_errors.result();
+    PrunedModel pruned = fit.prune(all, sol, W, kept.empty() ? nullptr : &kept, progress, 0.9, 0.95);
+    report.model_training = fit.pruned_errors(pruned, W, all);
     store_model(set, settings, shape, active, pruned, W, model, report);
     report.seconds_linear = seconds_since(t_linear);
     if (report.holdout_frames == 0) report.model_holdout = report.model_holdout_unpruned = Errors{};

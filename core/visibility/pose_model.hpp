@@ -23,15 +23,18 @@
 //   min |A_c X − B_c|² + λ |X|²
 // through one SVD of A_c shared by every vertex; λ = ρ·s_max² is chosen from
 // a fixed grid of ρ by the SH error on held-out frames (every k-th frame),
-// then X is refitted on all frames. Rank deficiency (more columns than
-// frames, repeated frames, joints that never move) only adds zero singular
-// values, which ridge handles.
+// linearized and in closed form from the SVD of the other frames
+// (ridge_curve.hpp), then X is refitted on all frames. Rank deficiency (more
+// columns than frames, repeated frames, joints that never move) only adds
+// zero singular values, which ridge handles.
 //
 // Model only what the scene requires: a vertex whose lobe parameters vary by
 // less than constant_tolerance (RMS) over the training frames stores a
 // constant; for the others, joints whose contribution is small are dropped
 // greedily (smallest first) while the dropped part stays under
-// prune_tolerance (RMS over the training frames).
+// prune_tolerance (RMS over the training frames). Both are decided once, on
+// the frames that are not held out (the model the held-out error measures),
+// and the model refitted on every frame keeps those joints.
 #pragma once
 
 #include <cstdint>
@@ -85,8 +88,11 @@ struct FitSettings {
     // ... and of each (vertex, frame) fit, which starts from the reference
     // axes: on the humanoid (docs/visibility-humanoid-benchmark.md) 2 fit the
     // frames as well as 8 (ZH sh error +2 %), give a held-out model error no
-    // worse, and take a quarter of the time of this, the fit's largest step.
-    int frame_zh_iterations = 2;
+    // worse, and take a quarter of the time of this, the fit's largest step;
+    // 1 against 2: ZH sh error +2 % again, held-out model error lower on the
+    // humanoid (AO 0.0149 vs 0.0152) and the test character (0.00308 vs
+    // 0.00310), a third less time (docs/visibility.md).
+    int frame_zh_iterations = 1;
     double axis_prior = 1.0;     // see zh_fit.hpp; 1 measured best for the linear model (docs/visibility.md)
     int threads = 0;
 };
@@ -115,7 +121,9 @@ struct FitReport {
     Errors model_holdout;
     Errors model_holdout_unpruned;  // the same before pruning (the plain ridge solution)
     double ridge_relative = 0.0;                          // ρ: λ = ρ·s_max²
-    std::vector<std::pair<double, double>> ridge_curve;   // (ρ, held-out sh_rms)
+    // (ρ, held-out SH RMS error of the ridge solution's lobes, linearized:
+    // ridge_curve.hpp; the ZH fit's own residual not included).
+    std::vector<std::pair<double, double>> ridge_curve;
     std::size_t constant_vertices = 0;
     std::size_t stored_joint_blocks = 0;   // Σ over vertices of joints kept
     std::size_t model_bytes = 0;           // stored payload

@@ -47,10 +47,12 @@ RaySet make_ray_set(const BakeSettings& settings) {
     return set;
 }
 
-FrameBaker::FrameBaker(const BakeSettings& settings, SceneBuild build)
-    : settings_(settings), build_(build), rays_(std::make_unique<RaySet>(make_ray_set(settings))) {
+FrameBaker::FrameBaker(const BakeSettings& settings, SceneBuild build, Traversal traversal)
+    : settings_(settings), build_(build), traversal_(traversal),
+      rays_(std::make_unique<RaySet>(make_ray_set(settings))) {
     if (build != SceneBuild::High && build != SceneBuild::Medium && build != SceneBuild::Low && build != SceneBuild::Refit)
         throw ArgumentError("unknown scene build");
+    if (traversal != Traversal::Fast && traversal != Traversal::Robust) throw ArgumentError("unknown traversal");
 }
 
 FrameBaker::~FrameBaker() = default;
@@ -92,7 +94,7 @@ void FrameBaker::bake(const FrameGeometry& geometry, const std::vector<std::uint
         local.scene_updated = true;
     } else {
         scene_.reset();
-        scene_ = std::make_unique<OcclusionScene>(meshes, build_);
+        scene_ = std::make_unique<OcclusionScene>(meshes, build_, traversal_);
     }
     const OcclusionScene& scene = *scene_;
     const auto t_cast = Clock::now();

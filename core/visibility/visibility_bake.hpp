@@ -80,13 +80,15 @@ void bake_frame(const FrameGeometry& geometry, const std::vector<std::uint32_t>&
 struct RaySet;
 class FrameBaker {
 public:
-    explicit FrameBaker(const BakeSettings& settings, SceneBuild build = SceneBuild::Medium);
+    explicit FrameBaker(const BakeSettings& settings, SceneBuild build = SceneBuild::Medium,
+                        Traversal traversal = Traversal::Fast);
     ~FrameBaker();
     FrameBaker(const FrameBaker&) = delete;
     FrameBaker& operator=(const FrameBaker&) = delete;
 
     const BakeSettings& settings() const { return settings_; }
     SceneBuild scene_build() const { return build_; }
+    Traversal traversal() const { return traversal_; }
     void set_threads(int threads);
     void bake(const FrameGeometry& geometry, const std::vector<std::uint32_t>& neighbours, float* visibility_out,
               const Progress& progress = {}, FrameBakeStats* stats = nullptr, double progress_from = 0.0,
@@ -95,6 +97,7 @@ public:
 private:
     BakeSettings settings_;
     SceneBuild build_;
+    Traversal traversal_;
     std::unique_ptr<RaySet> rays_;
     std::unique_ptr<OcclusionScene> scene_;
 };

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include <Eigen/Cholesky>
+#include <Eigen/LU>
 
 #include "common/math.hpp"
 #include "common/error.hpp"
@@ -33,11 +34,14 @@ void check(const ZhFitSettings& s) {
 
 // u_l(s)_m = sqrt(4π/(2l+1)) y_lm(s): unit vectors per band (Σ_m y_lm² = (2l+1)/4π).
 void band_vectors(int order, const Eigen::Vector3d& axis, double* u) {
+    static const auto scale = [] {
+        std::array<double, max_fit_order> s;
+        for (int l = 0; l < max_fit_order; ++l) s[l] = std::sqrt(4.0 * std::numbers::pi / (2.0 * l + 1.0));
+        return s;
+    }();
     sh::eval_unit(order, axis, u);
-    for (int l = 0; l < order; ++l) {
-        const double scale = std::sqrt(4.0 * std::numbers::pi / (2.0 * l + 1.0));
-        for (int m = -l; m <= l; ++m) u[sh::sh_index(l, m)] *= scale;
-    }
+    for (int l = 0; l < order; ++l)
+        for (int m = -l; m <= l; ++m) u[sh::sh_index(l, m)] *= scale[l];
 }
 
 using LobeMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, max_lobes, max_lobes>;
@@ -51,10 +55,29 @@ using LobeVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, max_lobes, 1>;
 // semi-definite matrices, gives the solution with 0 along the null
 // directions (what the clamp gave for a consistent system, without its
 // 1e300-sized answers for an inconsistent one). NaN in, NaN out, as before.
-LobeVector solve_band(const LobeMatrix& a, const LobeVector& b) {
-    const Eigen::LLT<LobeMatrix> cholesky(a);
-    if (cholesky.info() == Eigen::Success) return cholesky.solve(b);
+// Fixed-size matrices (one per lobe count) and Eigen's closed-form inverse
+// of up to 4 × 4: the dynamic-size LLT's bookkeeping took as long as the ZH
+// fit's own arithmetic. The matrix is positive definite (the ridge) and
+// tiny, so the inverse is as accurate here; a singular or non-finite one
+// goes to LDLT as before.
+template <int N>
+LobeVector solve_band_fixed(const LobeMatrix& a, const LobeVector& b) {
+    using Matrix = Eigen::Matrix<double, N, N>;
+    Matrix inverse;
+    bool invertible = false;
+    Matrix(a).computeInverseWithCheck(inverse, invertible, 1e-300);
+    if (invertible && inverse.allFinite()) return inverse * Eigen::Matrix<double, N, 1>(b);
     return a.ldlt().solve(b);
+}
+
+LobeVector solve_band(const LobeMatrix& a, const LobeVector& b) {
+    static_assert(max_lobes == 4, "one case per lobe count");
+    switch (a.rows()) {
+        case 1: return solve_band_fixed<1>(a, b);
+        case 2: return solve_band_fixed<2>(a, b);
+        case 3: return solve_band_fixed<3>(a, b);
+        default: return solve_band_fixed<4>(a, b);
+    }
 }
 
 struct Problem {
@@ -177,10 +200,20 @@ const std::vector<Eigen::Vector3d>& candidate_axes() {
     return axes;
 }
 
-// Energy of the best single lobe along `axis` in residual r: Σ_l (u_l·r_l)².
-double lobe_energy(int order, const Eigen::Vector3d& axis, const double* r) {
-    std::array<double, max_sh> u;
-    band_vectors(order, axis, u.data());
+// The band vectors of every candidate axis at every order, computed once:
+// each vertex's reference fit scores all 64 candidates per lobe.
+const std::vector<std::array<double, max_sh>>& candidate_band_vectors(int order) {
+    static const auto tables = [] {
+        std::array<std::vector<std::array<double, max_sh>>, max_fit_order + 1> t;
+        for (int o = 1; o <= max_fit_order; ++o)
+            for (const auto& axis : candidate_axes()) band_vectors(o, axis, t[o].emplace_back().data());
+        return t;
+    }();
+    return tables[order];
+}
+
+// Energy of the best single lobe with band vectors u in residual r: Σ_l (u_l·r_l)².
+double lobe_energy(int order, const double* u, const double* r) {
     double e = 0.0;
     for (int l = 0; l < order; ++l) {
         double s = 0.0;
@@ -237,18 +270,22 @@ double fit_zh_lobes(const ZhFitSettings& settings, const double* sh, const doubl
         std::array<double, max_sh> r;
         std::copy(sh, sh + n_sh, r.begin());
         for (int x = 0; x < lobes; ++x) {
+            std::array<double, max_sh> u;
             Eigen::Vector3d best = Eigen::Vector3d::UnitZ();
-            double best_energy = lobe_energy(order, best, r.data());
+            band_vectors(order, best, u.data());
+            double best_energy = lobe_energy(order, u.data(), r.data());
             if (order >= 2) {
                 const Eigen::Vector3d bent(r[sh::sh_index(1, 1)], r[sh::sh_index(1, -1)], r[sh::sh_index(1, 0)]);
                 if (bent.norm() > 1e-12) {
-                    const double e = lobe_energy(order, bent.normalized(), r.data());
+                    band_vectors(order, bent.normalized(), u.data());
+                    const double e = lobe_energy(order, u.data(), r.data());
                     if (e > best_energy) best_energy = e, best = bent.normalized();
                 }
             }
-            for (const auto& axis : candidate_axes()) {
-                const double e = lobe_energy(order, axis, r.data());
-                if (e > best_energy * (1.0 + 1e-12) + 1e-300) best_energy = e, best = axis;
+            const auto& candidates = candidate_band_vectors(order);
+            for (std::size_t c = 0; c < candidates.size(); ++c) {
+                const double e = lobe_energy(order, candidates[c].data(), r.data());
+                if (e > best_energy * (1.0 + 1e-12) + 1e-300) best_energy = e, best = candidate_axes()[c];
             }
             const Eigen::Vector2d xy = axis_to_lambert(best);
             q[2 * x] = xy.x();

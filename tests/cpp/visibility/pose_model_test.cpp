@@ -119,7 +119,7 @@ TrainingSet tilting_set(const std::vector<double>& angles, int vertices) {
     return set;
 }
 
-TEST(PoseModel, two_iterations_per_frame_fit_moving_lobes_about_as_well_as_eight) {
+TEST(PoseModel, the_default_iterations_per_frame_fit_moving_lobes_about_as_well_as_eight) {
     std::vector<double> angles;
     for (int f = 0; f < 12; ++f) angles.push_back(0.1 * f);
     const TrainingSet set = tilting_set(angles, 20);
@@ -132,9 +132,11 @@ TEST(PoseModel, two_iterations_per_frame_fit_moving_lobes_about_as_well_as_eight
         fit_pose_model(set, influence, s, {}, &report);
         return report.zh_fit.sh_rms;
     };
-    const double eight = zh_error(8), two = zh_error(2), none = zh_error(0);
+    const int chosen = FitSettings{}.frame_zh_iterations;  // 1 (measured 0.049 against 0.048 for 8)
+    ASSERT_GE(chosen, 1);
+    const double eight = zh_error(8), fitted = zh_error(chosen), none = zh_error(0);
     const double bound = 1.1 * eight + 1e-4;
-    EXPECT_LT(two, bound);
+    EXPECT_LT(fitted, bound);
     // Axes left at the reference fit's (no iteration) fail the same bound
     // (measured 0.066 against 0.048 for 8): it is one the frames' own fits
     // must earn.
