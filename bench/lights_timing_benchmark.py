@@ -173,7 +173,7 @@ def run_video(exe, tmp, lock, rounds=5):
     videos = make_videos(exe, tmp)
     env = dict(os.environ, PENUMBRA_FFMPEG=shipped_ffmpeg())
     version = subprocess.run([shipped_ffmpeg(), "-version"], capture_output=True, text=True).stdout.split("\n")[0]
-    rows, passed, cases = [], 0, 0
+    rows, passed, passed_cpu, cases = [], 0, 0, 0
     with locked(lock):
         load_before = load_average()
         for threads in (1, os.cpu_count() or 1):
@@ -184,9 +184,10 @@ def run_video(exe, tmp, lock, rounds=5):
                 ratio, cpu_ratio = ours / null, ours_cpu / null_cpu
                 cases += 1
                 passed += ratio <= 1.5
+                passed_cpu += cpu_ratio <= 1.5
                 rows.append(f"| {name} | {size_mb(kind, path):.1f} MB | {threads} | {null:.2f} | {ours:.2f} | "
-                            f"{ratio:.2f}x | {null_cpu:.2f} | {ours_cpu:.2f} | {cpu_ratio:.2f}x | "
-                            f"{'PASS' if ratio <= 1.5 else 'FAIL'} |")
+                            f"{ratio:.2f}x | {'PASS' if ratio <= 1.5 else 'FAIL'} | {null_cpu:.2f} | "
+                            f"{ours_cpu:.2f} | {cpu_ratio:.2f}x | {'PASS' if cpu_ratio <= 1.5 else 'FAIL'} |")
                 print(rows[-1], flush=True)
         load_after = load_average()
     md = [
@@ -202,15 +203,16 @@ def run_video(exe, tmp, lock, rounds=5):
         "for a video `VideoReader` (the probe, then the shipped ffmpeg decoding into a pipe, planar YUV converted "
         "here: core/image/yuv.hpp), for the sequence `read_image` per frame (OpenImageIO, its `threads` and "
         f"`exr_threads` set to T). The two alternate, {rounds} rounds each, best of each, milliseconds per frame; "
-        "wall-clock time decides the goal, CPU time (ours includes the ffmpeg child processes) is given beside it. "
-        "Goal (issue #14, item 5): ours at most 1.5x ffmpeg's. Machine: "
+        "wall-clock time and CPU time (ours and ffmpeg's, children included: the probe and the decoder for ours), "
+        "the latter not lengthened by the other jobs on the machine. Goal (issue #14, item 5): ours at most 1.5x "
+        "ffmpeg's, judged both ways. Machine: "
         f"{os.cpu_count()} cores, shared; load average (1, 5, 15 min) {load_before} before, {load_after} after.",
         "",
-        f"**{passed} of {cases} PASS.**",
+        f"**Wall clock: {passed} of {cases} PASS; CPU time: {passed_cpu} of {cases} PASS.**",
         "",
-        "| format | size | threads | ffmpeg -f null (ms) | ours (ms) | ours / ffmpeg | ffmpeg CPU (ms) | "
-        "ours CPU (ms) | CPU ratio | goal (<= 1.5x) |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| format | size | threads | ffmpeg -f null (ms) | ours (ms) | ours / ffmpeg | goal (<= 1.5x) | "
+        "ffmpeg CPU (ms) | ours CPU (ms) | CPU ratio | goal, CPU |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ] + rows
     return "\n".join(md) + "\n"
 

@@ -240,8 +240,13 @@ void assign_nearest(const LatLongGrid& grid, const Sites& sites, int row_begin, 
     if (row_begin < 0 || row_end > grid.height || row_begin > row_end)
         throw ArgumentError("assign_nearest: rows outside the grid");
     Assigner assigner(grid, sites, row_begin, owner);
-    // Root blocks at most a quarter of the grid wide (the radius bound above).
-    const int root_columns = std::clamp(grid.width / 4, 1, 256);
+    // Root blocks at most a quarter of the grid wide (the radius bound above),
+    // and with many sites about 64 sites' worth of cells, so that a root's
+    // candidates from the index stay few.
+    const double cells_per_site = double(grid.width) * grid.height / double(sites.size());
+    const int rows = std::max(1, row_end - row_begin);
+    const int wide = int(std::min(256.0, std::ceil(64.0 * cells_per_site / rows)));
+    const int root_columns = std::clamp(std::min(grid.width / 4, wide), 1, 256);
     for (int c0 = 0; c0 < grid.width; c0 += root_columns)
         assigner.root(row_begin, row_end, c0, std::min(grid.width, c0 + root_columns));
 }
