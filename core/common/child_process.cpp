@@ -44,6 +44,12 @@ ChildProcess::ChildProcess(const std::vector<std::string>& argv) {
     if (::pipe2(pipe_fds, O_CLOEXEC) != 0)
         throw IoError(std::string("cannot create a pipe: ") + std::strerror(errno));
     stdout_fd_ = pipe_fds[0];
+    // A 1 MiB pipe (Linux's default limit for unprivileged processes; the
+    // default is 64 KiB): a child writing whole video frames wakes us 16
+    // times less often. Where it is refused the pipe keeps its size.
+#ifdef F_SETPIPE_SZ
+    ::fcntl(stdout_fd_, F_SETPIPE_SZ, 1 << 20);
+#endif
     stderr_fd_ = anonymous_file();
 
     posix_spawn_file_actions_t actions;

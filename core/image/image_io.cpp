@@ -102,14 +102,21 @@ Image read_image(const std::string& path, int subimage) {
     if (spec.width <= 0 || spec.height <= 0)
         throw IoError("frame " + std::to_string(subimage) + " of '" + path + "' has zero size");
     const int nc = spec.nchannels;
+    const auto rgb = rgb_channels(spec);
+    const std::string damaged = "cannot read the pixels of '" + path + "': ";
+    Image image(spec.width, spec.height, 3);
+    if (rgb == std::array<int, 3>{0, 1, 2}) {
+        // R, G, B are the first three channels: straight into the image.
+        if (!in->read_image(subimage, 0, 0, 3, OIIO::TypeDesc::FLOAT, image.pixels.data()))
+            throw IoError(damaged + last_oiio_error("the file is damaged or truncated") +
+                          "; the file may be truncated or corrupt, re-export it");
+        return image;
+    }
     std::vector<float> raw(static_cast<std::size_t>(spec.width) * spec.height * nc);
     if (!in->read_image(subimage, 0, 0, nc, OIIO::TypeDesc::FLOAT, raw.data()))
-        throw IoError("cannot read the pixels of '" + path + "': " +
-                      last_oiio_error("the file is damaged or truncated") +
+        throw IoError(damaged + last_oiio_error("the file is damaged or truncated") +
                       "; the file may be truncated or corrupt, re-export it");
 
-    Image image(spec.width, spec.height, 3);
-    const auto rgb = rgb_channels(spec);
     const std::size_t n = image.pixel_count();
     for (std::size_t p = 0; p < n; ++p)
         for (int c = 0; c < 3; ++c)

@@ -10,8 +10,11 @@
 //
 // Frames come out like read_image()'s: float RGB as stored in the file, row 0
 // at the top. For ordinary video that is display-referred RGB in [0, 1]
-// (FFmpeg converts YUV with the matrix the file declares); colour/ converts
-// it to scene-linear.
+// (YUV converted with the matrix the file declares); colour/ converts it to
+// scene-linear. Planar YUV (what HEVC, H.264, ProRes, DNxHR and most other
+// codecs decode to) comes through the pipe as the decoder made it and is
+// converted here, as FFmpeg's scaler would (image/yuv.hpp); anything else
+// (RGB, grey, float) FFmpeg converts to planar float RGB itself.
 #pragma once
 
 #include <memory>
@@ -33,6 +36,10 @@ struct VideoInfo {
     int frame_count = 0;
     double frames_per_second = 0.0;
     std::string codec;  // FFmpeg's name: "hevc", "prores", ...
+    // As FFmpeg describes the stream ("" when it does not say): the
+    // decoder's pixel format ("yuv420p10le"), range ("tv", "pc") and colour
+    // space ("bt709", "bt2020nc", ...).
+    std::string pixel_format, color_range, color_space;
 };
 
 // Reads the container without decoding. Throws IoError naming the file and
@@ -42,7 +49,9 @@ VideoInfo probe_video(const std::string& path);
 // Decodes frames in order; asking for an earlier frame restarts the decoder.
 class VideoReader {
 public:
-    explicit VideoReader(std::string path);  // probes; throws IoError
+    // Probes; throws IoError. `threads`: FFmpeg's decoding threads and this
+    // side's conversion threads (0: as many as there are cores).
+    explicit VideoReader(std::string path, int threads = 0);
     ~VideoReader();
     const VideoInfo& info() const { return info_; }
     // Frame `index` in [0, frame_count). Throws ArgumentError out of range,
@@ -55,6 +64,7 @@ private:
     VideoInfo info_;
     std::unique_ptr<Decoder> decoder_;
     int next_ = 0;  // the frame the running decoder delivers next
+    int threads_ = 0;
 };
 
 }  // namespace penumbra

@@ -1,14 +1,17 @@
 #include "lights/lights.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <utility>
 
 #include <Eigen/Geometry>
 
 #include "common/error.hpp"
-#include "lights/direction_index.hpp"
+#include "lights/region_assignment.hpp"
+#include "lights/region_kernels.hpp"
 #include "lights/irradiance_fit.hpp"
 #include "common/parallel.hpp"
 #include "sh/point_sets.hpp"
@@ -20,11 +23,6 @@ constexpr double pi = std::numbers::pi;
 
 double luma(const std::array<double, 3>& y, const Eigen::Vector3d& rgb) {
     return y[0] * rgb[0] + y[1] * rgb[1] + y[2] * rgb[2];
-}
-
-double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-    // atan2 form: accurate for tiny and near-π angles alike.
-    return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
 void check_light_count(const EnvironmentMap& map, const LightOptions& options) {
@@ -79,80 +77,151 @@ void equal_power(const EnvironmentMap& map, const LuminanceDistribution& dist, c
     }
 }
 
+// Cells [begin, end) of `row` that went to `light` (black cells among them
+// went to none).
+struct CellRun {
+    int row, begin, end, light;
+};
+
 // What region mode gathers per light: Σ L Ω (RGB), the luminance-weighted
-// direction moment and Σ Y·Ω, and the light each cell went to (−1: black).
+// direction moment and Σ Y·Ω, the light each cell went to (−1: black), and
+// the runs of cells behind the sums, in the order they were added.
 struct Regions {
     std::vector<Eigen::Vector3d> rgb, moment;
     std::vector<double> y;
     std::vector<int> owner;
+    std::vector<CellRun> runs;
+    LatLongGrid grid{0, 0, 0.0};  // the map's cell centres
 };
 
-// Every lit cell goes to its nearest sample. One partial sum per block of
-// rows, added in block order: the same result on any number of threads.
+// One run of neighbouring cells of a row going to the same light: its share
+// of Σ L Ω, Σ Y·Ω·ω and Σ Y·Ω. Ω and θ are the row's, so only φ varies along
+// the run: Σ Y·Ω·ω = (sin θ Σ w cos φ, sin θ Σ w sin φ, cos θ Σ w).
+struct RunSum {
+    CellRun run;
+    Eigen::Vector3d rgb, moment;
+    double y;
+};
+
+// Cells [c0, c1) of row r as the SIMD kernels take them (region_kernels.hpp).
+detail::RowRun row_run(const EnvironmentMap& map, const LuminanceDistribution& dist, const LatLongGrid& grid, int r,
+                       int c0, int c1) {
+    const std::size_t first = std::size_t(r) * map.width + std::size_t(c0);
+    return {map.rgb.data() + 3 * first,
+            dist.weight.data() + first,
+            grid.cos_phi.data() + c0,
+            grid.sin_phi.data() + c0,
+            grid.sin_theta[std::size_t(r)],
+            grid.cos_theta[std::size_t(r)],
+            std::size_t(c1 - c0),
+            std::size_t(map.width) * map.height - first};
+}
+
+bool black(const float* p) { return p[0] <= 0.0f && p[1] <= 0.0f && p[2] <= 0.0f; }
+
+// The run's sums cell by cell, leaving out black cells: for a map that is
+// not sanitized (negative values), where adding everything would not do.
+detail::RunSums lit_cell_sums(const EnvironmentMap& map, const LuminanceDistribution& dist, const LatLongGrid& grid,
+                              int r, int c0, int c1) {
+    detail::RunSums s{{0.0, 0.0, 0.0}, 0.0, 0.0, 0.0, 0, true};
+    for (int c = c0; c < c1; ++c) {
+        const float* p = map.pixel(r, c);
+        if (black(p)) continue;
+        const double w = dist.weight[std::size_t(r) * map.width + c];
+        for (int ch = 0; ch < 3; ++ch) s.rgb[ch] += p[ch];
+        s.w += w;
+        s.w_cos += w * grid.cos_phi[std::size_t(c)];
+        s.w_sin += w * grid.sin_phi[std::size_t(c)];
+    }
+    return s;
+}
+
+// Rows [b, e) of the map, whose cells' nearest samples are in `owner` (black
+// cells become −1 there): one RunSum per run of cells with the same nearest
+// sample, in scan order, summed on SIMD lanes (region_kernels.hpp).
+void sum_rows(const EnvironmentMap& map, const LuminanceDistribution& dist, const LatLongGrid& grid, int b, int e,
+              int* owner, std::vector<RunSum>& out) {
+    for (int r = b; r < e; ++r) {
+        const std::size_t first = std::size_t(r) * map.width;
+        int* row = owner + first;
+        const double omega = map.solid_angle(r);
+        const double st = grid.sin_theta[std::size_t(r)], ct = grid.cos_theta[std::size_t(r)];
+        for (int c = 0; c < map.width;) {
+            const int k = row[c];
+            int end = c + 1;
+            while (end < map.width && row[end] == k) ++end;
+            detail::RunSums s = detail::run_sums(row_run(map, dist, grid, r, c, end));
+            // A black cell belongs to no light; every black cell has weight 0.
+            const bool maybe_black = s.zero_weight > 0 || s.negative;
+            if (s.negative) s = lit_cell_sums(map, dist, grid, r, c, end);
+            out.push_back({{r, c, end, k}, omega * Eigen::Vector3d(s.rgb[0], s.rgb[1], s.rgb[2]),
+                           Eigen::Vector3d(st * s.w_cos, st * s.w_sin, ct * s.w), s.w});
+            if (maybe_black)
+                for (int j = c; j < end; ++j)
+                    if (black(map.pixel(r, j))) row[j] = -1;
+            c = end;
+        }
+    }
+}
+
+// Every lit cell goes to its nearest sample (region_assignment.hpp: the same
+// assignment as a search over every sample). Runs and their sums per block
+// of rows, added in block and run order: the same result on any number of
+// threads.
 Regions gather_regions(const EnvironmentMap& map, const LuminanceDistribution& dist,
                        const std::vector<Sample>& samples, const ParallelOptions& rows) {
     const int n = int(samples.size());
-    std::vector<Eigen::Vector3d> sample_dirs(n);
-    for (int k = 0; k < n; ++k) sample_dirs[k] = samples[k].direction;
-    const DirectionIndex index(sample_dirs);
-    std::vector<Regions> acc(block_count(std::size_t(map.height), rows.block));
+    std::vector<Eigen::Vector3d> directions(n);
+    for (int k = 0; k < n; ++k) directions[k] = samples[k].direction;
+    const Sites sites(directions);
     Regions total{std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero()),
-                  std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero()), std::vector<double>(n, 0.0),
-                  std::vector<int>(std::size_t(map.width) * map.height, -1)};
+                  std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero()),
+                  std::vector<double>(n, 0.0),
+                  std::vector<int>(std::size_t(map.width) * map.height),
+                  {},
+                  LatLongGrid(map.width, map.height, map.theta_max())};
+    const LatLongGrid& grid = total.grid;
+    std::vector<std::vector<RunSum>> runs(block_count(std::size_t(map.height), rows.block));
     parallel_blocks(std::size_t(map.height), rows, [&](std::size_t block, std::size_t b, std::size_t e) {
-        Regions& a = acc[block];
-        a.rgb.assign(n, Eigen::Vector3d::Zero());
-        a.moment.assign(n, Eigen::Vector3d::Zero());
-        a.y.assign(n, 0.0);
-        for (int r = int(b); r < int(e); ++r) {
-            const double omega = map.solid_angle(r);
-            for (int c = 0; c < map.width; ++c) {
-                const std::size_t cell = std::size_t(r) * map.width + c;
-                const float* p = map.pixel(r, c);
-                if (p[0] <= 0.0f && p[1] <= 0.0f && p[2] <= 0.0f) continue;
-                const Eigen::Vector3d w = map.direction(r, c);
-                const int k = index.nearest(w);
-                total.owner[cell] = k;
-                a.rgb[k] += omega * Eigen::Vector3d(p[0], p[1], p[2]);
-                a.moment[k] += dist.weight[cell] * w;
-                a.y[k] += dist.weight[cell];
-            }
-        }
+        int* owner = total.owner.data() + b * std::size_t(map.width);
+        assign_nearest(grid, sites, int(b), int(e), owner);
+        sum_rows(map, dist, grid, int(b), int(e), total.owner.data(), runs[block]);
     });
-    for (const Regions& a : acc) {
-        if (a.rgb.empty()) continue;
-        for (int k = 0; k < n; ++k) {
-            total.rgb[k] += a.rgb[k];
-            total.moment[k] += a.moment[k];
-            total.y[k] += a.y[k];
+    std::size_t count = 0;
+    for (const auto& block : runs) count += block.size();
+    total.runs.reserve(count);
+    for (const auto& block : runs)
+        for (const RunSum& sum : block) {
+            const int k = sum.run.light;
+            total.rgb[k] += sum.rgb;
+            total.moment[k] += sum.moment;
+            total.y[k] += sum.y;
+            total.runs.push_back(sum.run);
         }
-    }
     return total;
 }
 
-// Spread: RMS angle of each region about its light's direction, summed per
-// block of rows as above.
+// Spread: RMS angle of each region about its light's direction (θ² on SIMD
+// lanes, region_kernels.hpp), one sum per run of cells in parallel, added
+// in run order (black cells have weight 0 and add nothing).
 void region_spread(const EnvironmentMap& map, const LuminanceDistribution& dist, const Regions& regions,
                    const ParallelOptions& rows, FrameLights& out) {
     const int n = int(out.lights.size());
-    std::vector<std::vector<double>> partial(block_count(std::size_t(map.height), rows.block));
-    ParallelOptions spread_rows = rows;
-    spread_rows.stage = "lights.region_spread";
-    parallel_blocks(std::size_t(map.height), spread_rows, [&](std::size_t block, std::size_t b, std::size_t e) {
-        std::vector<double>& part = partial[block];
-        part.assign(n, 0.0);
-        for (int r = int(b); r < int(e); ++r)
-            for (int c = 0; c < map.width; ++c) {
-                const std::size_t cell = std::size_t(r) * map.width + c;
-                const int k = regions.owner[cell];
-                if (k < 0 || dist.weight[cell] <= 0.0) continue;
-                const double a = angle_between(map.direction(r, c), out.lights[k].direction);
-                part[k] += dist.weight[cell] * a * a;
-            }
+    const LatLongGrid& grid = regions.grid;
+    std::vector<double> run_sum(regions.runs.size());
+    ParallelOptions spread_runs = rows;
+    spread_runs.stage = "lights.region_spread";
+    spread_runs.block = 1024;
+    parallel_for(regions.runs.size(), spread_runs, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i) {
+            const CellRun& run = regions.runs[i];
+            const Eigen::Vector3d& l = out.lights[std::size_t(run.light)].direction;
+            run_sum[i] = detail::weighted_squared_angles(row_run(map, dist, grid, run.row, run.begin, run.end), l.x(),
+                                                         l.y(), l.z());
+        }
     });
     std::vector<double> second(n, 0.0);
-    for (const auto& part : partial)
-        for (std::size_t k = 0; k < part.size(); ++k) second[k] += part[k];
+    for (std::size_t i = 0; i < regions.runs.size(); ++i) second[std::size_t(regions.runs[i].light)] += run_sum[i];
     for (int k = 0; k < n; ++k)
         out.lights[k].spread = regions.y[k] > 0.0 ? std::sqrt(second[k] / regions.y[k]) : 0.0;
 }
@@ -161,7 +230,8 @@ void region_spread(const EnvironmentMap& map, const LuminanceDistribution& dist,
 // points at their luminance-weighted centroid.
 void region_power(const EnvironmentMap& map, const LuminanceDistribution& dist, const std::vector<Sample>& samples,
                   const LightOptions& options, FrameLights& out) {
-    const ParallelOptions rows{options.threads, std::max<std::size_t>(1, (std::size_t(map.height) + 63) / 64),
+    // Blocks of at least 16 rows: the assignment's blocks grow with them.
+    const ParallelOptions rows{options.threads, std::max<std::size_t>(16, (std::size_t(map.height) + 63) / 64),
                                "lights.region_powers"};
     const Regions regions = gather_regions(map, dist, samples, rows);
     for (std::size_t k = 0; k < out.lights.size(); ++k) {

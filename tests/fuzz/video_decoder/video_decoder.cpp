@@ -1,15 +1,18 @@
-// Fuzz harness: our side of video decoding, core/image/video.cpp and
-// core/common/child_process.cpp, with the fuzzer playing ffmpeg. probe_video
-// parses ffmpeg's framecrc listing (dimensions, time base, one line per
-// packet); VideoReader reads raw planar-float frames from the child's stdout
-// and restarts it to go back. Running the real ffmpeg on each input is the
+// Fuzz harness: our side of video decoding, core/image/video.cpp,
+// core/image/yuv.cpp and core/common/child_process.cpp, with the fuzzer
+// playing ffmpeg. probe_video parses ffmpeg's framecrc listing (dimensions,
+// time base, one line per packet) and its description of the stream on
+// stderr (pixel format, range, colour space); VideoReader reads raw frames
+// (planar float RGB, or the decoder's planar YUV, converted here) from the
+// child's stdout and restarts it to go back. Running the real ffmpeg on each input is the
 // video_file harness; here a two-line shell script stands in for it, so an
 // input costs two small process starts instead of two decodes, and the
 // listing and frame bytes can be anything, not only what ffmpeg writes.
 //
 // Input: byte 0 sets the exit status of the stand-in: low nibble 0xF makes
 // the probe fail, high nibble 0xF the decode. Then the listing, up to the
-// first NUL byte; everything after it is the decoder's stdout.
+// first NUL byte (printed on the probe's stdout and stderr alike);
+// everything after it is the decoder's stdout.
 // Checked: only penumbra::Error; an accepted video has a positive size and
 // frame count, and every frame read has that size.
 #include <sys/stat.h>
@@ -24,7 +27,7 @@ namespace {
 
 const char* const stand_in = R"(#!/bin/sh
 d=$(dirname "$0")
-case " $* " in *" framecrc "*) cat "$d/listing"; exit $(cat "$d/probe_status");; esac
+case " $* " in *" framecrc "*) cat "$d/listing"; cat "$d/listing" >&2; exit $(cat "$d/probe_status");; esac
 cat "$d/frames"; exit $(cat "$d/decode_status")
 )";
 
