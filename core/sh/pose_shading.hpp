@@ -65,6 +65,7 @@
 namespace penumbra::sh {
 
 namespace detail {
+template <typename S>
 struct PoseShadingSetup;
 }  // namespace detail
 
@@ -98,6 +99,11 @@ struct PoseBuffers {
     Real* rgb = nullptr;               // (N, 3) output
     Real* visibility = nullptr;        // (N,) optional output: cosine-weighted
                                        // visibility (1/π)∫_H (ω·n) V, the AO
+    // Instead of lobe_axes and lobe_bands: (N, C, 2 + order), the visibility
+    // model's lobe parameters (visibility/zh_fit.hpp: the axis as Lambert
+    // azimuthal equal-area (X, Y) about +z, then the bands), turned into axes
+    // in the lanes (a non-finite (X, Y) gives +z, as lambert_to_axis does).
+    const Real* lobe_params = nullptr;
 };
 
 // A vertex is invalid when its normal is zero or non-finite, its tangent is
@@ -108,6 +114,26 @@ struct PoseBuffers {
 // visibility 0) and is counted here; it never throws.
 struct ShadingStats {
     std::size_t invalid_vertices = 0;
+};
+
+class PoseShader;
+
+// One call's constants (operator, lighting, rotation tables, the kernel for
+// this CPU), made once by PoseShader::prepare and used for any number of
+// vertex ranges: the run time (visibility/runtime_shading.hpp) fuses the
+// shading with its other per-vertex steps, block by block. Immutable, so
+// several threads may shade ranges at once.
+class PreparedShading {
+public:
+    // Shades vertices [begin, end) of `buffers` (lobes_per_vertex as
+    // prepared; positions needed for Phong); returns how many were invalid.
+    std::size_t shade_range(const PoseBuffers<float>& buffers, std::size_t begin, std::size_t end) const;
+
+private:
+    friend class PoseShader;
+    std::shared_ptr<const detail::PoseShadingSetup<float>> setup_;
+    void (*run_)(const detail::PoseShadingSetup<float>&, const PoseBuffers<float>&, std::size_t, std::size_t,
+                 std::size_t&) = nullptr;
 };
 
 class PoseShader {
@@ -128,6 +154,11 @@ public:
     ShadingStats shade(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters,
                        const PoseBuffers<double>& buffers) const;
 
+    // shade()'s checks and set-up without the buffers, for PreparedShading.
+    // Throws as shade() does for the lighting and parameters.
+    PreparedShading prepare(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters, int lobes,
+                            bool want_visibility) const;
+
     // The operator T a model uses: the diffuse operator for diffuse and
     // translucent, phong_zonal_operator(order, α) for phong (cached per
     // exponent; the cache is emptied when it holds 16).
@@ -143,14 +174,15 @@ private:
         double value;
     };
 
+    void check_call(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters, int lobes) const;
     template <typename Real>
     ShadingStats shade_impl(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters,
                             const PoseBuffers<Real>& buffers) const;
-    detail::PoseShadingSetup make_setup(const ZonalOperator& op, const Eigen::MatrixXd& lighting,
-                                        const ShadingParameters& parameters, int lobes,
-                                        bool want_visibility) const;
+    detail::PoseShadingSetup<double> make_setup(const ZonalOperator& op, const Eigen::MatrixXd& lighting,
+                                                const ShadingParameters& parameters, int lobes,
+                                                bool want_visibility) const;
     template <typename Real>
-    static ShadingStats run_threads(const detail::PoseShadingSetup& setup, const PoseBuffers<Real>& buffers,
+    static ShadingStats run_threads(const detail::PoseShadingSetup<Real>& setup, const PoseBuffers<Real>& buffers,
                                     int thread_count);
 
     int order_;
