@@ -166,7 +166,14 @@ PreparedShading PoseShader::prepare(const Eigen::MatrixXd& lighting, const Shadi
     prepared.setup_ = std::make_shared<const PoseShadingSetup<float>>(
         detail::to_float(make_setup(*op, lighting, parameters, lobes, want_visibility)));
     prepared.run_ = range_function<float>(order_);
+    prepared.run_block_ = detail::block_function(order_);
     return prepared;
+}
+
+std::size_t PreparedShading::shade_block(const PoseBlock& block) const {
+    std::size_t invalid = 0;
+    if (block.vertex_count) run_block_(*setup_, block, invalid);
+    return invalid;
 }
 
 std::size_t PreparedShading::shade_range(const PoseBuffers<float>& buffers, std::size_t begin, std::size_t end) const {

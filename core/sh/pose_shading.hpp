@@ -116,6 +116,24 @@ struct ShadingStats {
     std::size_t invalid_vertices = 0;
 };
 
+// One block of float inputs in structure-of-arrays layout: each component a
+// row of its own, rows `stride` floats apart, so the kernel loads whole lane
+// vectors instead of gathering every lane. What the run time writes
+// (visibility/runtime_shading.cpp). Every row must be readable and writable
+// up to vertex_count rounded up to a multiple of 16 (the widest lanes); the
+// values past vertex_count are read, shaded and discarded, so keep them
+// finite (zeros are best: such lanes are invalid and cost nothing extra).
+struct PoseBlock {
+    std::size_t vertex_count = 0;
+    std::size_t stride = 0;
+    const float* normals = nullptr;      // 3 rows x, y, z (world)
+    const float* tangents = nullptr;     // 3 rows (world)
+    const float* positions = nullptr;    // 3 rows (world; Phong)
+    const float* lobe_params = nullptr;  // lobes × (2 + order) rows, as PoseBuffers::lobe_params by component
+    float* rgb = nullptr;                // 3 rows, output
+    float* visibility = nullptr;         // 1 row, output (optional)
+};
+
 class PoseShader;
 
 // One call's constants (operator, lighting, rotation tables, the kernel for
@@ -128,12 +146,15 @@ public:
     // Shades vertices [begin, end) of `buffers` (lobes_per_vertex as
     // prepared; positions needed for Phong); returns how many were invalid.
     std::size_t shade_range(const PoseBuffers<float>& buffers, std::size_t begin, std::size_t end) const;
+    // The same for a block in structure-of-arrays layout.
+    std::size_t shade_block(const PoseBlock& block) const;
 
 private:
     friend class PoseShader;
     std::shared_ptr<const detail::PoseShadingSetup<float>> setup_;
     void (*run_)(const detail::PoseShadingSetup<float>&, const PoseBuffers<float>&, std::size_t, std::size_t,
                  std::size_t&) = nullptr;
+    void (*run_block_)(const detail::PoseShadingSetup<float>&, const PoseBlock&, std::size_t&) = nullptr;
 };
 
 class PoseShader {

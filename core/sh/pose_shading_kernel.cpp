@@ -32,6 +32,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -216,16 +217,44 @@ struct LaneFrame {
 
 // n = normalize(normal), t = the tangent Gram–Schmidt'ed against n, b = n × t
 // (header); invalid lanes get (t, b, n) = (x, y, z).
+// Rows of a PoseBlock: lanes k = batch.start + k, loaded whole.
+PENUMBRA_LANES_INLINE Vec<float> load_row(const float* row, const Batch& batch) {
+    Vec<float> v;
+    std::memcpy(&v, row + batch.start, sizeof v);
+    return v;
+}
+
+// (x, y, z) of vertex data: gathered from interleaved triples, or three rows.
 template <typename S>
-PENUMBRA_LANES_INLINE LaneFrame<S> load_frames(const PoseBuffers<S>& buffers, const Batch& batch) {
-    LaneFrame<S> f{};
+PENUMBRA_LANES_INLINE void load_triples(const S* data, const Batch& batch, Vec<S>& x, Vec<S>& y, Vec<S>& z) {
     for (int k = 0; k < Lanes<S>::count; ++k) {
-        const std::size_t vertex = batch.vertex(k);
-        const S* np = buffers.normals + 3 * vertex;
-        const S* tp = buffers.tangents + 3 * vertex;
-        f.nx[k] = np[0]; f.ny[k] = np[1]; f.nz[k] = np[2];
-        f.tx[k] = tp[0]; f.ty[k] = tp[1]; f.tz[k] = tp[2];
+        const S* p = data + 3 * batch.vertex(k);
+        x[k] = p[0]; y[k] = p[1]; z[k] = p[2];
     }
+}
+
+PENUMBRA_LANES_INLINE void load_rows(const float* rows, std::size_t stride, const Batch& batch, Vec<float>& x,
+                                     Vec<float>& y, Vec<float>& z) {
+    x = load_row(rows, batch);
+    y = load_row(rows + stride, batch);
+    z = load_row(rows + 2 * stride, batch);
+}
+
+template <typename S>
+PENUMBRA_LANES_INLINE void load_normals_tangents(const PoseBuffers<S>& buffers, const Batch& batch, LaneFrame<S>& f) {
+    load_triples<S>(buffers.normals, batch, f.nx, f.ny, f.nz);
+    load_triples<S>(buffers.tangents, batch, f.tx, f.ty, f.tz);
+}
+
+PENUMBRA_LANES_INLINE void load_normals_tangents(const PoseBlock& block, const Batch& batch, LaneFrame<float>& f) {
+    load_rows(block.normals, block.stride, batch, f.nx, f.ny, f.nz);
+    load_rows(block.tangents, block.stride, batch, f.tx, f.ty, f.tz);
+}
+
+template <typename S, typename Buffers>
+PENUMBRA_LANES_INLINE LaneFrame<S> load_frames(const Buffers& buffers, const Batch& batch) {
+    LaneFrame<S> f{};
+    load_normals_tangents(buffers, batch, f);
     f.valid = normalize_lanes<S>(f.nx, f.ny, f.nz, S(0), S(0), S(1));
     // Gram–Schmidt; a tangent within 1e-6 rad of n leaves nothing usable.
     f.valid &= normalize_lanes<S>(f.tx, f.ty, f.tz, S(1), S(0), S(0));
@@ -249,16 +278,25 @@ struct LaneVector {
 // to the horizon when n·w < 0; r = n where w or the clamp is undefined. A
 // non-finite position makes the lane invalid.
 template <typename S>
-PENUMBRA_LANES_INLINE LaneVector<S> reflection_axis(const PoseShadingSetup<S>& setup, const PoseBuffers<S>& buffers,
+PENUMBRA_LANES_INLINE void load_positions(const PoseBuffers<S>& buffers, const Batch& batch, Vec<S>& x, Vec<S>& y,
+                                          Vec<S>& z) {
+    load_triples<S>(buffers.positions, batch, x, y, z);
+}
+
+PENUMBRA_LANES_INLINE void load_positions(const PoseBlock& block, const Batch& batch, Vec<float>& x, Vec<float>& y,
+                                          Vec<float>& z) {
+    load_rows(block.positions, block.stride, batch, x, y, z);
+}
+
+template <typename S, typename Buffers>
+PENUMBRA_LANES_INLINE LaneVector<S> reflection_axis(const PoseShadingSetup<S>& setup, const Buffers& buffers,
                                                     const Batch& batch, LaneFrame<S>& f) {
     const Vec<S> &nx = f.nx, &ny = f.ny, &nz = f.nz;
     Vec<S> wx{}, wy{}, wz{};
-    for (int k = 0; k < Lanes<S>::count; ++k) {
-        const S* pp = buffers.positions + 3 * batch.vertex(k);
-        wx[k] = setup.camera[0] - pp[0];
-        wy[k] = setup.camera[1] - pp[1];
-        wz[k] = setup.camera[2] - pp[2];
-    }
+    load_positions(buffers, batch, wx, wy, wz);
+    wx = setup.camera[0] - wx;
+    wy = setup.camera[1] - wy;
+    wz = setup.camera[2] - wz;
     const Mask<S> position_ok = finite<S>(wx) & finite<S>(wy) & finite<S>(wz);
     f.valid &= position_ok;
     const Mask<S> has_view = normalize_lanes<S>(wx, wy, wz, nx, ny, nz) & position_ok;
@@ -328,8 +366,38 @@ PENUMBRA_LANES_INLINE LaneVector<S> lambert_axis(Vec<S> x, Vec<S> y) {
 // axis with zero bands is an unused lobe; anything else that is zero or
 // non-finite makes the vertex invalid).
 template <typename S>
-PENUMBRA_LANES_INLINE LaneVector<S> load_lobe(const PoseBuffers<S>& buffers, const Batch& batch, int lobe, int lobes,
+PENUMBRA_LANES_INLINE LaneVector<S> load_lobe_raw(const PoseBuffers<S>& buffers, const Batch& batch, int lobe,
+                                                  int lobes, int order, Vec<S>* band);
+
+PENUMBRA_LANES_INLINE LaneVector<float> load_lobe_raw(const PoseBlock& block, const Batch& batch, int lobe, int,
+                                                      int order, Vec<float>* band) {
+    const float* rows = block.lobe_params + std::size_t(lobe) * (2 + order) * block.stride;
+    for (int l = 0; l < order; ++l) band[l] = load_row(rows + (2 + l) * block.stride, batch);
+    return lambert_axis<float>(load_row(rows, batch), load_row(rows + block.stride, batch));
+}
+
+template <typename S, typename Buffers>
+PENUMBRA_LANES_INLINE LaneVector<S> load_lobe(const Buffers& buffers, const Batch& batch, int lobe, int lobes,
                                               int order, Vec<S>* band, Mask<S>& valid) {
+    const LaneVector<S> a = load_lobe_raw(buffers, batch, lobe, lobes, order, band);
+    Mask<S> bands_finite = finite<S>(band[0]), bands_zero = band[0] == S(0);
+    for (int l = 1; l < order; ++l) {
+        bands_finite &= finite<S>(band[l]);
+        bands_zero &= band[l] == S(0);
+    }
+    LaneVector<S> unit = a;
+    const Mask<S> axis_ok = normalize_lanes<S>(unit.x, unit.y, unit.z, S(0), S(0), S(1));
+    valid &= bands_finite & (axis_ok | bands_zero);
+    const Mask<S> use = axis_ok & bands_finite & valid;
+    for (int l = 0; l < order; ++l) band[l] = use ? band[l] : splat<S>(0);
+    return unit;
+}
+
+// A lobe's axis and bands as stored (PoseBuffers): axes and bands, or
+// lobe parameters.
+template <typename S>
+PENUMBRA_LANES_INLINE LaneVector<S> load_lobe_raw(const PoseBuffers<S>& buffers, const Batch& batch, int lobe,
+                                                  int lobes, int order, Vec<S>* band) {
     LaneVector<S> a{};
     if (buffers.lobe_params) {
         for (int k = 0; k < Lanes<S>::count; ++k) {
@@ -347,15 +415,6 @@ PENUMBRA_LANES_INLINE LaneVector<S> load_lobe(const PoseBuffers<S>& buffers, con
             for (int l = 0; l < order; ++l) band[l][k] = g[l];
         }
     }
-    Mask<S> bands_finite = finite<S>(band[0]), bands_zero = band[0] == S(0);
-    for (int l = 1; l < order; ++l) {
-        bands_finite &= finite<S>(band[l]);
-        bands_zero &= band[l] == S(0);
-    }
-    const Mask<S> axis_ok = normalize_lanes<S>(a.x, a.y, a.z, S(0), S(0), S(1));
-    valid &= bands_finite & (axis_ok | bands_zero);
-    const Mask<S> use = axis_ok & bands_finite & valid;
-    for (int l = 0; l < order; ++l) band[l] = use ? band[l] : splat<S>(0);
     return a;
 }
 
@@ -382,8 +441,8 @@ PENUMBRA_LANES_INLINE void add_normal_zonal(const PoseShadingSetup<S>& setup, in
 
 // Steps 2–3: every lobe turned into F' and expanded by Eq. 1 into v (and,
 // for Phong's visibility output, into normal_zonal). y and band are scratch.
-template <typename S, int kOrder>
-PENUMBRA_LANES_INLINE void lobes_to_sh_lanes(const PoseShadingSetup<S>& setup, const PoseBuffers<S>& buffers,
+template <typename S, int kOrder, typename Buffers>
+PENUMBRA_LANES_INLINE void lobes_to_sh_lanes(const PoseShadingSetup<S>& setup, const Buffers& buffers,
                                              const Batch& batch, const Plan& plan, const LaneRotation<S>& q,
                                              Mask<S>& valid, Vec<S>* v, Vec<S>* normal_zonal, Vec<S>* y,
                                              Vec<S>* band) {
@@ -391,7 +450,7 @@ PENUMBRA_LANES_INLINE void lobes_to_sh_lanes(const PoseShadingSetup<S>& setup, c
     for (int i = 0; i < order * order; ++i) v[i] = splat<S>(0);
     for (int l = 0; l < order; ++l) normal_zonal[l] = splat<S>(0);
     for (int lobe = 0; lobe < plan.lobes; ++lobe) {
-        const LaneVector<S> a = load_lobe<S>(buffers, batch, lobe, plan.lobes, order, band, valid);
+        const LaneVector<S> a = load_lobe<S, Buffers>(buffers, batch, lobe, plan.lobes, order, band, valid);
         const Vec<S> x = q.m00 * a.x + q.m01 * a.y + q.m02 * a.z;
         const Vec<S> yy = q.m10 * a.x + q.m11 * a.y + q.m12 * a.z;
         const Vec<S> z = q.m20 * a.x + q.m21 * a.y + q.m22 * a.z;
@@ -456,10 +515,26 @@ PENUMBRA_LANES_INLINE void store_batch(const PoseBuffers<S>& buffers, const Batc
     }
 }
 
+// A block's rows: whole lanes (past vertex_count too, discarded there).
+PENUMBRA_LANES_INLINE void store_batch(const PoseBlock& block, const Batch& batch, Mask<float> valid,
+                                       const Vec<float>* rgb, const Vec<float>& visibility,
+                                       std::size_t& invalid_count) {
+    for (int k = 0; k < batch.count; ++k) invalid_count += valid[k] ? 0 : 1;
+    const Vec<float> zero{};
+    for (int c = 0; c < 3; ++c) {
+        const Vec<float> out = valid ? rgb[c] : zero;
+        std::memcpy(block.rgb + c * block.stride + batch.start, &out, sizeof out);
+    }
+    if (block.visibility) {
+        const Vec<float> out = valid ? visibility : zero;
+        std::memcpy(block.visibility + batch.start, &out, sizeof out);
+    }
+}
+
 // Shades vertices [begin, end) in S, the buffers' precision.
-template <typename S, int kOrder>
-void shade_range(const PoseShadingSetup<S>& setup, const PoseBuffers<S>& buffers, std::size_t begin,
-                 std::size_t end, std::size_t& invalid_count) {
+template <typename S, int kOrder, typename Buffers>
+void shade_batches(const PoseShadingSetup<S>& setup, const Buffers& buffers, std::size_t begin, std::size_t end,
+                   std::size_t& invalid_count) {
     constexpr int kBands = kOrder ? kOrder : max_order;
     constexpr int kLanes = Lanes<S>::count;
     const bool phong = setup.model == ShadingModel::phong;
@@ -472,12 +547,13 @@ void shade_range(const PoseShadingSetup<S>& setup, const PoseBuffers<S>& buffers
 
     for (std::size_t start = begin; start < end; start += kLanes) {
         const Batch batch{start, int(std::min<std::size_t>(kLanes, end - start))};
-        LaneFrame<S> frame = load_frames<S>(buffers, batch);
+        LaneFrame<S> frame = load_frames<S, Buffers>(buffers, batch);
         // z' = n, or for Phong the reflection axis r.
-        const LaneVector<S> axis = plan.phong ? reflection_axis<S>(setup, buffers, batch, frame)
+        const LaneVector<S> axis = plan.phong ? reflection_axis<S, Buffers>(setup, buffers, batch, frame)
                                               : LaneVector<S>{frame.nx, frame.ny, frame.nz};
         const LaneRotation<S> rotation = frame_rotation<S>(axis, frame);
-        lobes_to_sh_lanes<S, kOrder>(setup, buffers, batch, plan, rotation, frame.valid, v, normal_zonal, y, band);
+        lobes_to_sh_lanes<S, kOrder, Buffers>(setup, buffers, batch, plan, rotation, frame.valid, v, normal_zonal, y,
+                                              band);
         apply_operator_lanes<S, kOrder>(setup, plan.order, v, u);
         Vec<S> rgb[3];
         world_rgb_lanes<S, kOrder>(setup, plan, rotation, frame, u, y, rgb);
@@ -485,8 +561,19 @@ void shade_range(const PoseShadingSetup<S>& setup, const PoseBuffers<S>& buffers
         if (buffers.visibility)
             for (int l = 0; l < plan.order; ++l)
                 visibility += setup.ao_weight[l] * (plan.phong ? normal_zonal[l] : v[sh_index(l, 0)]);
-        store_batch<S>(buffers, batch, frame.valid, rgb, visibility, invalid_count);
+        store_batch(buffers, batch, frame.valid, rgb, visibility, invalid_count);
     }
+}
+
+template <typename S, int kOrder>
+void shade_range(const PoseShadingSetup<S>& setup, const PoseBuffers<S>& buffers, std::size_t begin,
+                 std::size_t end, std::size_t& invalid_count) {
+    shade_batches<S, kOrder, PoseBuffers<S>>(setup, buffers, begin, end, invalid_count);
+}
+
+template <int kOrder>
+void shade_block(const PoseShadingSetup<float>& setup, const PoseBlock& block, std::size_t& invalid_count) {
+    shade_batches<float, kOrder, PoseBlock>(setup, block, 0, block.vertex_count, invalid_count);
 }
 
 #undef PENUMBRA_LANES_INLINE
@@ -506,6 +593,20 @@ RangeFunction<S> range_function(int order) {
     }
 }
 
+BlockFunction block_function(int order) {
+    switch (order) {
+        case 1: return &shade_block<1>;
+        case 2: return &shade_block<2>;
+        case 3: return &shade_block<3>;
+        case 4: return &shade_block<4>;
+        case 5: return &shade_block<5>;
+        case 6: return &shade_block<6>;
+        case 7: return &shade_block<7>;
+        case 8: return &shade_block<8>;
+        default: return &shade_block<0>;
+    }
+}
+
 RangeFunction<float> range_function_float(int order) { return range_function<float>(order); }
 RangeFunction<double> range_function_double(int order) { return range_function<double>(order); }
 int lanes() { return kDoubleLanes; }
@@ -518,10 +619,12 @@ namespace penumbra::sh::detail {
 
 HWY_EXPORT(range_function_float);
 HWY_EXPORT(range_function_double);
+HWY_EXPORT(block_function);
 HWY_EXPORT(lanes);
 
 RangeFunction<float> range_function_float(int order) { return HWY_DYNAMIC_DISPATCH(range_function_float)(order); }
 RangeFunction<double> range_function_double(int order) { return HWY_DYNAMIC_DISPATCH(range_function_double)(order); }
+BlockFunction block_function(int order) { return HWY_DYNAMIC_DISPATCH(block_function)(order); }
 int simd_lanes() { return HWY_DYNAMIC_DISPATCH(lanes)(); }
 
 }  // namespace penumbra::sh::detail

@@ -55,10 +55,15 @@ template <typename Real>
 using RangeFunction = void (*)(const PoseShadingSetup<Real>&, const PoseBuffers<Real>&, std::size_t, std::size_t,
                                std::size_t&);
 
+// Shades a block in structure-of-arrays layout (PoseBlock), adding the
+// invalid vertices to invalid_count.
+using BlockFunction = void (*)(const PoseShadingSetup<float>&, const PoseBlock&, std::size_t&);
+
 // The kernel for `order` of the SIMD target chosen for this CPU (Highway's
 // dynamic dispatch: the best target the CPU supports among those compiled).
 RangeFunction<float> range_function_float(int order);
 RangeFunction<double> range_function_double(int order);
+BlockFunction block_function(int order);
 
 // How many vertices one batch holds on the chosen target.
 int simd_lanes();

@@ -678,6 +678,13 @@ void synthesize_range(const PoseModel& model, const float* features, std::size_t
                              params_out);
 }
 
+void synthesize_rows(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
+                     float* params_out, std::size_t stride) {
+    detail::synthesize_range(model.params_per_vertex(), features_per_joint(model.features), model.joint_offsets.data(),
+                             model.joint_index.data(), model.bias.data(), model.weights.data(), features, begin, end,
+                             params_out, std::max<std::size_t>(stride, 1));
+}
+
 void synthesize_lobes(const PoseModel& model, const float* joint_rotations, float* params_out, float* axes_out,
                       float* bands_out, int threads) {
     const int d = model.params_per_vertex();

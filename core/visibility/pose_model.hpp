@@ -162,6 +162,10 @@ void synthesize_params(const PoseModel& model, const float* joint_rotations, flo
 std::vector<float> pose_features(const PoseModel& model, const float* joint_rotations);
 void synthesize_range(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
                       float* params_out);
+// The same as rows: parameter i of vertex v at params_out[i · stride + v −
+// begin] (stride ≥ end − begin).
+void synthesize_rows(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
+                     float* params_out, std::size_t stride);
 
 // synthesize_params and params_to_lobes in one parallel pass.
 void synthesize_lobes(const PoseModel& model, const float* joint_rotations, float* params_out, float* axes_out,

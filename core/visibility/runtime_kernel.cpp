@@ -268,11 +268,20 @@ PENUMBRA_LANES_INLINE Lanes3 basis_tangent(const Lanes3& n) {
     return {1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x};
 }
 
+// The first `count` lanes of (x, y, z) into three rows `stride` apart, from
+// `column` on.
+PENUMBRA_LANES_INLINE void store_rows(float* rows, std::size_t stride, std::size_t column, const Lanes3& v, int count) {
+    std::memcpy(rows + column, &v.x, sizeof(float) * std::size_t(count));
+    std::memcpy(rows + stride + column, &v.y, sizeof(float) * std::size_t(count));
+    std::memcpy(rows + 2 * stride + column, &v.z, sizeof(float) * std::size_t(count));
+}
+
 // A batch of `count` ≤ kLanes vertices from `begin` (a short batch repeats
 // its last vertex in the spare lanes).
 void frames_batch(const FrameTransform& tr, const float* positions, const std::uint32_t* neighbours,
                   std::size_t begin, int count, std::size_t chunk_begin, const float* local_normals,
-                  float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts) {
+                  std::size_t stride, float* normals_out, float* tangents_out, float* positions_out,
+                  FrameCounts& counts) {
     Lanes3 local, p, q;
     MaskF own{};
     for (int k = 0; k < kLanes; ++k) {
@@ -309,27 +318,22 @@ void frames_batch(const FrameTransform& tr, const float* positions, const std::u
     t = {from_edge ? t.x * t_inverse : basis.x, from_edge ? t.y * t_inverse : basis.y,
          from_edge ? t.z * t_inverse : basis.z};
     for (int k = 0; k < count; ++k) {
-        const std::size_t row = begin + k - chunk_begin;
         counts.repaired += usable[k] ? 0 : 1;
         counts.fallback += from_edge[k] ? 0 : 1;
-        normals_out[3 * row] = n.x[k];
-        normals_out[3 * row + 1] = n.y[k];
-        normals_out[3 * row + 2] = n.z[k];
-        tangents_out[3 * row] = t.x[k];
-        tangents_out[3 * row + 1] = t.y[k];
-        tangents_out[3 * row + 2] = t.z[k];
-        positions_out[3 * row] = world.x[k] + tr.offset[0];
-        positions_out[3 * row + 1] = world.y[k] + tr.offset[1];
-        positions_out[3 * row + 2] = world.z[k] + tr.offset[2];
     }
+    const std::size_t column = begin - chunk_begin;
+    store_rows(normals_out, stride, column, n, count);
+    store_rows(tangents_out, stride, column, t, count);
+    store_rows(positions_out, stride, column, {world.x + tr.offset[0], world.y + tr.offset[1], world.z + tr.offset[2]},
+               count);
 }
 
 void frames_range(const FrameTransform& transform, const float* positions, const std::uint32_t* neighbours,
-                  std::size_t begin, std::size_t end, const float* local_normals, float* normals_out,
-                  float* tangents_out, float* positions_out, FrameCounts& counts) {
+                  std::size_t begin, std::size_t end, const float* local_normals, std::size_t stride,
+                  float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts) {
     for (std::size_t v = begin; v < end; v += kLanes)
         frames_batch(transform, positions, neighbours, v, int(std::min<std::size_t>(kLanes, end - v)), begin,
-                     local_normals, normals_out, tangents_out, positions_out, counts);
+                     local_normals, stride, normals_out, tangents_out, positions_out, counts);
 }
 
 // acc + a·b, fused where the target has FMA (an explicit fma is not
@@ -365,7 +369,7 @@ PENUMBRA_LANES_INLINE Quad multiply_add(Quad a, Quad b, Quad acc) {
 template <int D>
 void synthesize_fixed(int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index, const float* bias,
                       const float* weights, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out) {
+                      float* params_out, std::size_t stride) {
     static_assert(D % 4 == 0);
     constexpr int kQuads = D / 4;
     for (std::size_t v = begin; v < end; ++v) {
@@ -379,33 +383,47 @@ void synthesize_fixed(int fpj, const std::uint32_t* offsets, const std::uint16_t
                 for (int q = 0; q < kQuads; ++q) acc[q] = multiply_add(fa, load_quad(w + a * D + 4 * q), acc[q]);
             }
         }
-        std::memcpy(params_out + (v - begin) * D, acc, sizeof acc);
+        if (!stride) {
+            std::memcpy(params_out + (v - begin) * D, acc, sizeof acc);
+            continue;
+        }
+        float values[D];
+        std::memcpy(values, acc, sizeof acc);
+        for (int i = 0; i < D; ++i) params_out[i * stride + (v - begin)] = values[i];
     }
 }
 
 void synthesize_any(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index, const float* bias,
                     const float* weights, const float* features, std::size_t begin, std::size_t end,
-                    float* params_out) {
+                    float* params_out, std::size_t stride) {
     for (std::size_t v = begin; v < end; ++v) {
-        float* acc = params_out + (v - begin) * d;
-        for (int i = 0; i < d; ++i) acc[i] = bias[v * d + i];
+        // Column v − begin of the rows, or the vertex's d values.
+        const std::size_t step = stride ? stride : 1;
+        float* acc = params_out + (stride ? v - begin : (v - begin) * d);
+        for (int i = 0; i < d; ++i) acc[i * step] = bias[v * d + i];
         for (std::uint32_t e = offsets[v]; e < offsets[v + 1]; ++e) {
             const float* f = features + std::size_t(joint_index[e]) * fpj;
             const float* w = weights + std::size_t(e) * fpj * d;
             for (int a = 0; a < fpj; ++a)
-                for (int i = 0; i < d; ++i) acc[i] = multiply_add(f[a], w[a * d + i], acc[i]);
+                for (int i = 0; i < d; ++i) acc[i * step] = multiply_add(f[a], w[a * d + i], acc[i * step]);
         }
     }
 }
 
 void synthesize_range(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index,
                       const float* bias, const float* weights, const float* features, std::size_t begin,
-                      std::size_t end, float* params_out) {
+                      std::size_t end, float* params_out, std::size_t stride) {
     // 2 and 4 lobes at order 4 (2 + 4 parameters per lobe), the usual models.
     switch (d) {
-        case 12: return synthesize_fixed<12>(fpj, offsets, joint_index, bias, weights, features, begin, end, params_out);
-        case 24: return synthesize_fixed<24>(fpj, offsets, joint_index, bias, weights, features, begin, end, params_out);
-        default: return synthesize_any(d, fpj, offsets, joint_index, bias, weights, features, begin, end, params_out);
+        case 12:
+            return synthesize_fixed<12>(fpj, offsets, joint_index, bias, weights, features, begin, end, params_out,
+                                        stride);
+        case 24:
+            return synthesize_fixed<24>(fpj, offsets, joint_index, bias, weights, features, begin, end, params_out,
+                                        stride);
+        default:
+            return synthesize_any(d, fpj, offsets, joint_index, bias, weights, features, begin, end, params_out,
+                                  stride);
     }
 }
 
@@ -425,9 +443,9 @@ HWY_EXPORT(synthesize_range);
 
 void synthesize_range(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index,
                       const float* bias, const float* weights, const float* features, std::size_t begin,
-                      std::size_t end, float* params_out) {
+                      std::size_t end, float* params_out, std::size_t stride) {
     HWY_DYNAMIC_DISPATCH(synthesize_range)(d, fpj, offsets, joint_index, bias, weights, features, begin, end,
-                                           params_out);
+                                           params_out, stride);
 }
 
 void face_normals_range(const std::uint32_t* face_start, const std::uint32_t* corner_vertex, const float* positions,
@@ -449,10 +467,10 @@ void lobes_from_params(int order, std::size_t count, const float* params, float*
 }
 
 void frames_range(const FrameTransform& transform, const float* positions, const std::uint32_t* neighbours,
-                  std::size_t begin, std::size_t end, const float* local_normals, float* normals_out,
-                  float* tangents_out, float* positions_out, FrameCounts& counts) {
-    HWY_DYNAMIC_DISPATCH(frames_range)(transform, positions, neighbours, begin, end, local_normals, normals_out,
-                                       tangents_out, positions_out, counts);
+                  std::size_t begin, std::size_t end, const float* local_normals, std::size_t stride,
+                  float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts) {
+    HWY_DYNAMIC_DISPATCH(frames_range)(transform, positions, neighbours, begin, end, local_normals, stride,
+                                       normals_out, tangents_out, positions_out, counts);
 }
 
 }  // namespace penumbra::visibility::detail

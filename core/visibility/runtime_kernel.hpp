@@ -41,14 +41,15 @@ struct FrameCounts {
 };
 
 // Vertices [begin, end): their object-space normals (count × 3, unit or
-// zero) → world-space unit normals, world positions and unit tangents
-// (count × 3 each, row v − begin), by mesh_frames.hpp's rule: the tangent
+// zero) → world-space unit normals, world positions and unit tangents, each
+// as three rows x, y, z `stride` floats apart (sh::PoseBlock's layout;
+// vertex v in column v − begin), by mesh_frames.hpp's rule: the tangent
 // follows the edge to the reference neighbour, projected onto the tangent
 // plane, or Duff et al.'s frame of the normal when that edge is within ~0.06°
 // of the normal (or the vertex is its own neighbour).
 void frames_range(const FrameTransform& transform, const float* positions, const std::uint32_t* neighbours,
-                  std::size_t begin, std::size_t end, const float* local_normals, float* normals_out,
-                  float* tangents_out, float* positions_out, FrameCounts& counts);
+                  std::size_t begin, std::size_t end, const float* local_normals, std::size_t stride,
+                  float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts);
 
 // Lobe parameters (count lobes of 2 + order each: Lambert X, Y, then the
 // bands) → unit axes (count × 3) and bands (count × order): pose_model.hpp's
@@ -60,9 +61,11 @@ void lobes_from_params(int order, std::size_t count, const float* params, float*
 // joint block e in [offsets[v], offsets[v + 1]), the joint's fpj features
 // times the block's fpj × d weights. Written from params_out[0] on. On
 // targets with FMA the multiply-adds are fused (the result differs from the
-// others by float rounding).
+// others by float rounding). stride 0: d floats per vertex from
+// params_out[0]; otherwise d rows `stride` floats apart, vertex v in column
+// v − begin (sh::PoseBlock's layout).
 void synthesize_range(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index,
                       const float* bias, const float* weights, const float* features, std::size_t begin,
-                      std::size_t end, float* params_out);
+                      std::size_t end, float* params_out, std::size_t stride = 0);
 
 }  // namespace penumbra::visibility::detail

@@ -101,7 +101,8 @@ struct FrameJob {
     float* visibility_out;
 };
 
-// Per-chunk arrays, in the layouts PoseBuffers reads.
+// Per-chunk arrays: the object-space normals (3 per vertex), then rows of
+// kChunk floats in sh::PoseBlock's layout (zero past a short last chunk).
 struct ChunkScratch {
     explicit ChunkScratch(const PoseModel& model)
         : local_normals(3 * kChunk), normals(3 * kChunk), tangents(3 * kChunk), positions(3 * kChunk),
@@ -125,7 +126,8 @@ void chunk_frames(const FrameJob& job, std::size_t begin, std::size_t end, Chunk
     since = now;
     detail::FrameCounts counts;
     detail::frames_range(job.transform, job.positions, job.mesh.neighbours.data(), begin, end,
-                         s.local_normals.data(), s.normals.data(), s.tangents.data(), s.positions.data(), counts);
+                         s.local_normals.data(), kChunk, s.normals.data(), s.tangents.data(), s.positions.data(),
+                         counts);
     totals.repaired += counts.repaired;
     totals.fallback += counts.fallback;
 }
@@ -136,19 +138,19 @@ void chunk_frames(const FrameJob& job, std::size_t begin, std::size_t end, Chunk
 // vertex, and would become 0).
 void chunk_shade(const FrameJob& job, std::size_t begin, std::size_t end, ChunkScratch& s, TaskTotals& totals) {
     const std::size_t count = end - begin;
-    sh::PoseBuffers<float> buffers;
-    buffers.vertex_count = count;
-    buffers.lobes_per_vertex = job.model.lobes;
-    buffers.lobe_params = s.params.data();
-    buffers.normals = s.normals.data();
-    buffers.tangents = s.tangents.data();
-    buffers.positions = s.positions.data();
-    buffers.rgb = s.rgb.data();
-    buffers.visibility = s.visibility.data();
-    totals.invalid += job.shading.shade_range(buffers, 0, count);
+    sh::PoseBlock block;
+    block.vertex_count = count;
+    block.stride = kChunk;
+    block.lobe_params = s.params.data();
+    block.normals = s.normals.data();
+    block.tangents = s.tangents.data();
+    block.positions = s.positions.data();
+    block.rgb = s.rgb.data();
+    block.visibility = s.visibility.data();
+    totals.invalid += job.shading.shade_block(block);
     for (std::size_t i = 0; i < count; ++i) {
         float* out = job.rgba_out + 4 * (begin + i);
-        for (int c = 0; c < 3; ++c) out[c] = s.rgb[3 * i + c] > 0.0f ? s.rgb[3 * i + c] : 0.0f;
+        for (int c = 0; c < 3; ++c) out[c] = s.rgb[c * kChunk + i] > 0.0f ? s.rgb[c * kChunk + i] : 0.0f;
         out[3] = 1.0f;
         const float ao = s.visibility[i];
         job.visibility_out[begin + i] = ao > 0.0f ? std::min(ao, 1.0f) : 0.0f;
@@ -168,7 +170,7 @@ void run_task(const FrameJob& job, std::size_t begin, std::size_t end, TaskTotal
         chunk_frames(job, chunk, stop, scratch, totals, since);
         add(kFrames, since);
         // The shader reads the lobe parameters and turns them into axes itself.
-        synthesize_range(job.model, job.features, chunk, stop, scratch.params.data());
+        synthesize_rows(job.model, job.features, chunk, stop, scratch.params.data(), kChunk);
         add(kLobes, since);
         chunk_shade(job, chunk, stop, scratch, totals);
         add(kShading, since);

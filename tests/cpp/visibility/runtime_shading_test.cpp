@@ -199,56 +199,66 @@ FrameCase frame_case(std::mt19937_64& rng, sh::ShadingModel shading) {
     return c;
 }
 
-// shade_frame against shade_pose given the same normals (the rule's, moved
-// to world space here) and the world positions: the fused pass computes the
-// same thing in one pass.
-TEST(RuntimeShading, fused_frame_matches_the_separate_passes) {
-    std::mt19937_64 rng(3);
-    for (const sh::ShadingModel shading : {sh::ShadingModel::diffuse, sh::ShadingModel::phong,
-                                           sh::ShadingModel::translucent}) {
-        const FrameCase c = frame_case(rng, shading);
-        const std::size_t V = c.polygons.vertex_count();
-        const RuntimeMesh mesh(V, c.polygons.sizes, c.polygons.loops);
-        const sh::PoseShader shader(4);
-        std::vector<float> rgba(4 * V, -1.0f), ao(V, -1.0f);
-        const FrameResult fused = shade_frame(c.model, shader, mesh, c.rotations.data(), c.polygons.positions.data(),
-                                              c.world, c.lighting, c.parameters, rgba.data(), ao.data());
+// One model of shading on the current target: shade_frame against
+// shade_pose given the same normals (the rule's, moved to world space
+// here) and world positions.
+void expect_fused_frame_matches_separate_passes(std::mt19937_64& rng, sh::ShadingModel shading,
+                                                const std::string& target) {
+    const FrameCase c = frame_case(rng, shading);
+    const std::size_t V = c.polygons.vertex_count();
+    const RuntimeMesh mesh(V, c.polygons.sizes, c.polygons.loops);
+    const sh::PoseShader shader(4);
+    std::vector<float> rgba(4 * V, -1.0f), ao(V, -1.0f);
+    const FrameResult fused = shade_frame(c.model, shader, mesh, c.rotations.data(), c.polygons.positions.data(),
+                                          c.world, c.lighting, c.parameters, rgba.data(), ao.data());
 
-        std::vector<float> local(3 * V), world_positions(3 * V), world_normals(3 * V);
-        mesh.polygons.vertex_normals(c.polygons.positions.data(), local.data());
-        const Eigen::Matrix3d linear = c.world.topLeftCorner<3, 3>(), normal_matrix = linear.inverse().transpose();
-        for (std::size_t v = 0; v < V; ++v) {
-            const Eigen::Vector3d p = linear * point(c.polygons, std::uint32_t(v)) + c.world.topRightCorner<3, 1>();
-            const Eigen::Vector3d n = normal_matrix * Eigen::Vector3d(local[3 * v], local[3 * v + 1], local[3 * v + 2]);
-            for (int k = 0; k < 3; ++k) {
-                world_positions[3 * v + k] = float(p[k]);
-                world_normals[3 * v + k] = float(n[k]);
-            }
-        }
-        const RuntimeResult separate = shade_pose(c.model, shader, c.rotations.data(), world_positions, world_normals,
-                                                  {}, mesh.neighbours, c.lighting, c.parameters);
-        EXPECT_EQ(fused.stats.invalid_vertices, separate.stats.invalid_vertices);
-        double largest = 0.0, scale = 0.0;
-        bool clamped = false;
-        for (std::size_t v = 0; v < V; ++v) {
-            for (int k = 0; k < 3; ++k) {
-                const float expected = std::max(separate.rgb[3 * v + k], 0.0f);
-                clamped |= separate.rgb[3 * v + k] < 0.0f;
-                largest = std::max(largest, double(std::abs(rgba[4 * v + k] - expected)));
-                scale = std::max(scale, double(expected));
-            }
-            EXPECT_EQ(rgba[4 * v + 3], 1.0f);
-            const float expected_ao = std::clamp(separate.visibility[v], 0.0f, 1.0f);
-            largest = std::max(largest, double(std::abs(ao[v] - expected_ao)));
-        }
-        // The same float kernel; the frames differ by float rounding only
-        // (float lanes here, double in shade_pose's vertex_frames).
-        EXPECT_LT(largest, 2e-5 * scale) << int(shading);
-        EXPECT_GT(scale, 0.1);
-        if (shading == sh::ShadingModel::phong) {
-            EXPECT_TRUE(clamped) << "no negative shade to clamp: weak case";
+    std::vector<float> local(3 * V), world_positions(3 * V), world_normals(3 * V);
+    mesh.polygons.vertex_normals(c.polygons.positions.data(), local.data());
+    const Eigen::Matrix3d linear = c.world.topLeftCorner<3, 3>(), normal_matrix = linear.inverse().transpose();
+    for (std::size_t v = 0; v < V; ++v) {
+        const Eigen::Vector3d p = linear * point(c.polygons, std::uint32_t(v)) + c.world.topRightCorner<3, 1>();
+        const Eigen::Vector3d n = normal_matrix * Eigen::Vector3d(local[3 * v], local[3 * v + 1], local[3 * v + 2]);
+        for (int k = 0; k < 3; ++k) {
+            world_positions[3 * v + k] = float(p[k]);
+            world_normals[3 * v + k] = float(n[k]);
         }
     }
+    const RuntimeResult separate = shade_pose(c.model, shader, c.rotations.data(), world_positions, world_normals,
+                                              {}, mesh.neighbours, c.lighting, c.parameters);
+    EXPECT_EQ(fused.stats.invalid_vertices, separate.stats.invalid_vertices);
+    double largest = 0.0, scale = 0.0;
+    bool clamped = false;
+    for (std::size_t v = 0; v < V; ++v) {
+        for (int k = 0; k < 3; ++k) {
+            const float expected = std::max(separate.rgb[3 * v + k], 0.0f);
+            clamped |= separate.rgb[3 * v + k] < 0.0f;
+            largest = std::max(largest, double(std::abs(rgba[4 * v + k] - expected)));
+            scale = std::max(scale, double(expected));
+        }
+        EXPECT_EQ(rgba[4 * v + 3], 1.0f);
+        const float expected_ao = std::clamp(separate.visibility[v], 0.0f, 1.0f);
+        largest = std::max(largest, double(std::abs(ao[v] - expected_ao)));
+    }
+    // The same float kernel; the frames differ by float rounding only
+    // (float lanes here, double in shade_pose's vertex_frames).
+    EXPECT_LT(largest, 2e-5 * scale) << target << " " << int(shading);
+    EXPECT_GT(scale, 0.1);
+    if (shading == sh::ShadingModel::phong) {
+        EXPECT_TRUE(clamped) << "no negative shade to clamp: weak case";
+    }
+}
+
+// The fused pass (its loops and the shader's structure-of-arrays input)
+// computes what the separate passes do, on every SIMD target.
+TEST(RuntimeShading, fused_frame_matches_the_separate_passes_on_every_target) {
+    std::mt19937_64 rng(3);
+    for (const std::string& target : sh::simd_targets()) {
+        sh::force_simd_target(target);
+        for (const sh::ShadingModel shading : {sh::ShadingModel::diffuse, sh::ShadingModel::phong,
+                                               sh::ShadingModel::translucent})
+            expect_fused_frame_matches_separate_passes(rng, shading, target);
+    }
+    sh::force_simd_target("");
 }
 
 TEST(RuntimeShading, results_do_not_depend_on_thread_count) {
