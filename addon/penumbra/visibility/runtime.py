@@ -8,6 +8,7 @@ Normalization (a contract): under a uniform World of radiance 1, the diffuse
 """
 
 import os
+import stat
 import time
 
 import bpy
@@ -108,10 +109,14 @@ def loaded_model(obj, check_topology=False):
     if not s.model_path:
         raise VisibilityInputError(f"'{obj.name}' has no visibility model: bake one first")
     path = bpy.path.abspath(s.model_path)
-    if not os.path.isfile(path):
+    try:
+        status = os.stat(path)  # one call a frame: whether the file is there and when it changed
+    except OSError:
+        status = None
+    if status is None or not stat.S_ISREG(status.st_mode):
         raise VisibilityInputError(f"the model file '{path}' of '{obj.name}' is missing — bake again")
     entry = _models.get(obj.name)
-    if entry is None or entry.path != path or entry.mtime != os.path.getmtime(path) or \
+    if entry is None or entry.path != path or entry.mtime != status.st_mtime or \
             entry.counts != _mesh_counts(obj.data):
         _models.pop(obj.name, None)
         entry = _Loaded(obj, path)
@@ -123,20 +128,21 @@ def loaded_model(obj, check_topology=False):
 
 
 def _ensure_attributes(mesh):
+    """The two point attributes, made (or remade with the right type) when
+    needed. Returns them, ready to write."""
     attrs = mesh.attributes
-    shading = attrs.get(SHADING_ATTRIBUTE)
-    if shading is not None and (shading.domain != "POINT" or shading.data_type != "FLOAT_COLOR"):
-        attrs.remove(shading)
-        shading = None
-    if shading is None:
-        shading = attrs.new(SHADING_ATTRIBUTE, "FLOAT_COLOR", "POINT")
-    visibility = attrs.get(VISIBILITY_ATTRIBUTE)
-    if visibility is not None and (visibility.domain != "POINT" or visibility.data_type != "FLOAT"):
-        attrs.remove(visibility)
-        visibility = None
-    if visibility is None:
-        visibility = attrs.new(VISIBILITY_ATTRIBUTE, "FLOAT", "POINT")
-    return SHADING_ATTRIBUTE, VISIBILITY_ATTRIBUTE
+    found = []
+    for name, data_type in ((SHADING_ATTRIBUTE, "FLOAT_COLOR"), (VISIBILITY_ATTRIBUTE, "FLOAT")):
+        attribute = attrs.get(name)
+        if attribute is not None and (attribute.domain != "POINT" or attribute.data_type != data_type):
+            attrs.remove(attribute)
+            attribute = None
+        found.append(attribute)
+        if attribute is None:
+            attrs.new(name, data_type, "POINT")
+    if None in found:  # adding or removing a layer may move the others: look them up afresh
+        return attrs[SHADING_ATTRIBUTE], attrs[VISIBILITY_ATTRIBUTE]
+    return found[0], found[1]
 
 
 def _read_positions(obj, depsgraph, entry):
@@ -191,9 +197,9 @@ def shade_object(obj, scene, depsgraph=None, check_topology=False):
                                        rgba_out=entry.rgba, visibility_out=entry.ao)
     t2 = time.perf_counter()
     mesh = obj.data
-    shading_name, visibility_name = _ensure_attributes(mesh)
-    mesh.attributes[shading_name].data.foreach_set("color", rgba.reshape(-1))
-    mesh.attributes[visibility_name].data.foreach_set("value", ao)
+    shading, visibility = _ensure_attributes(mesh)
+    shading.data.foreach_set("color", rgba.reshape(-1))
+    visibility.data.foreach_set("value", ao)
     # Blender 4.x and 5.x tag the mesh for the writes above; 3.4 does not, and
     # without the tag the evaluated mesh (viewport, renders of this
     # depsgraph) keeps the old values. Either way the depsgraph evaluates
