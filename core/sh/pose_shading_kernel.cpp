@@ -151,6 +151,45 @@ PENUMBRA_LANES_INLINE void eval_lanes(const PoseShadingSetup<S>& setup, const Ve
     }
 }
 
+// v_lm += scale_l y_lm(x, y, z): eval_lanes's recurrence, each term added to
+// v as soon as it is known, so no array of y_lm is held (fewer registers
+// spilled to the stack).
+template <typename S, int kOrder>
+PENUMBRA_LANES_INLINE void accumulate_lobe_lanes(const PoseShadingSetup<S>& setup, const Vec<S>& x, const Vec<S>& y,
+                                                 const Vec<S>& z, const Vec<S>* scale, Vec<S>* v) {
+    const int order = kOrder ? kOrder : setup.order;
+    const S sqrt2 = std::numbers::sqrt2_v<S>;
+    Vec<S> c = splat<S>(1), s = splat<S>(0);  // C_m + i S_m = (x + iy)^m
+    for (int m = 0; m < order; ++m) {
+        if (m > 0) {
+            const Vec<S> c_next = x * c - y * s;
+            s = x * s + y * c;
+            c = c_next;
+        }
+        const Vec<S> sc = sqrt2 * c, ss = sqrt2 * s;
+        const auto add = [&](int l, const Vec<S>& p) {
+            if (m == 0) {
+                v[sh_index(l, 0)] += scale[l] * p;
+            } else {
+                v[sh_index(l, -m)] += scale[l] * (p * ss);
+                v[sh_index(l, m)] += scale[l] * (p * sc);
+            }
+        };
+        Vec<S> before = splat<S>(setup.legendre_diagonal[m]);
+        add(m, before);
+        if (m + 1 >= order) break;
+        Vec<S> last = setup.legendre_first[m] * z * setup.legendre_diagonal[m];
+        add(m + 1, last);
+        for (int l = m + 2; l < order; ++l) {
+            const int i = sh_index(l, m);
+            const Vec<S> next = setup.legendre_a[i] * (z * last - setup.legendre_b[i] * before);
+            add(l, next);
+            before = last;
+            last = next;
+        }
+    }
+}
+
 // In place: coefficients of f turned by Rz(α) (g(ω) = f(Rz(α)ᵀ ω)), per lane
 // with (cos α, sin α) = (c, s): (p, q) = (w_lm, w_l,−m) →
 // (p cos mα − q sin mα, p sin mα + q cos mα).
@@ -454,11 +493,9 @@ PENUMBRA_LANES_INLINE void lobes_to_sh_lanes(const PoseShadingSetup<S>& setup, c
         const Vec<S> x = q.m00 * a.x + q.m01 * a.y + q.m02 * a.z;
         const Vec<S> yy = q.m10 * a.x + q.m11 * a.y + q.m12 * a.z;
         const Vec<S> z = q.m20 * a.x + q.m21 * a.y + q.m22 * a.z;
-        eval_lanes<S, kOrder>(setup, x, yy, z, y);
-        for (int l = 0; l < order; ++l) {
-            const Vec<S> scale = setup.zh_scale[l] * band[l];
-            for (int m = -l; m <= l; ++m) v[sh_index(l, m)] += scale * y[sh_index(l, m)];
-        }
+        Vec<S> scale[kOrder ? kOrder : max_order];
+        for (int l = 0; l < order; ++l) scale[l] = setup.zh_scale[l] * band[l];
+        accumulate_lobe_lanes<S, kOrder>(setup, x, yy, z, scale, v);
         if (plan.phong_visibility) add_normal_zonal<S>(setup, order, a.z, band, normal_zonal);
     }
 }
