@@ -123,7 +123,10 @@ struct ShadingStats {
 // (visibility/runtime_shading.cpp). Every row must be readable and writable
 // up to vertex_count rounded up to a multiple of 16 (the widest lanes); the
 // values past vertex_count are read, shaded and discarded, so keep them
-// finite (zeros are best: such lanes are invalid and cost nothing extra).
+// finite (zeros are best: they cost nothing extra). The frames must be
+// orthonormal already (unit normals, unit tangents orthogonal to them, as
+// the run time's are): a block skips the normalization and Gram–Schmidt,
+// and only a non-finite position (Phong) or band makes a vertex invalid.
 struct PoseBlock {
     std::size_t vertex_count = 0;
     std::size_t stride = 0;

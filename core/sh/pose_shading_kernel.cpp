@@ -35,6 +35,7 @@
 #include <cstring>
 #include <numbers>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "common/error.hpp"
@@ -294,6 +295,12 @@ template <typename S, typename Buffers>
 PENUMBRA_LANES_INLINE LaneFrame<S> load_frames(const Buffers& buffers, const Batch& batch) {
     LaneFrame<S> f{};
     load_normals_tangents(buffers, batch, f);
+    if constexpr (std::is_same_v<Buffers, PoseBlock>) {
+        // A block's frames are orthonormal already (PoseBlock's contract).
+        f.valid = f.nx == f.nx;
+        f.bx = f.ny * f.tz - f.nz * f.ty; f.by = f.nz * f.tx - f.nx * f.tz; f.bz = f.nx * f.ty - f.ny * f.tx;
+        return f;
+    }
     f.valid = normalize_lanes<S>(f.nx, f.ny, f.nz, S(0), S(0), S(1));
     // Gram–Schmidt; a tangent within 1e-6 rad of n leaves nothing usable.
     f.valid &= normalize_lanes<S>(f.tx, f.ty, f.tz, S(1), S(0), S(0));
@@ -425,7 +432,11 @@ PENUMBRA_LANES_INLINE LaneVector<S> load_lobe(const Buffers& buffers, const Batc
         bands_zero &= band[l] == S(0);
     }
     LaneVector<S> unit = a;
-    const Mask<S> axis_ok = normalize_lanes<S>(unit.x, unit.y, unit.z, S(0), S(0), S(1));
+    Mask<S> axis_ok = bands_finite | ~bands_finite;
+    // Axes from a block's lobe parameters are unit by construction
+    // (lambert_axis): nothing to normalize or check.
+    if constexpr (!std::is_same_v<Buffers, PoseBlock>)
+        axis_ok = normalize_lanes<S>(unit.x, unit.y, unit.z, S(0), S(0), S(1));
     valid &= bands_finite & (axis_ok | bands_zero);
     const Mask<S> use = axis_ok & bands_finite & valid;
     for (int l = 0; l < order; ++l) band[l] = use ? band[l] : splat<S>(0);
