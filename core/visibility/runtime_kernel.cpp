@@ -51,6 +51,31 @@ struct Lanes3 {
     VecF x, y, z;
 };
 
+// Lanes filled one by one go through memory: written lane by lane, read as
+// whole vectors (an insert per lane compiled to a chain of masked
+// broadcasts, each waiting on the last), and the other way for results read
+// lane by lane.
+struct Staging3 {
+    alignas(64) float x[kLanes], y[kLanes], z[kLanes];
+    void set(int k, const float* p) {
+        x[k] = p[0];
+        y[k] = p[1];
+        z[k] = p[2];
+    }
+    Lanes3 load() const {
+        Lanes3 v;
+        std::memcpy(&v.x, x, sizeof x);
+        std::memcpy(&v.y, y, sizeof y);
+        std::memcpy(&v.z, z, sizeof z);
+        return v;
+    }
+    void store(const Lanes3& v) {
+        std::memcpy(x, &v.x, sizeof x);
+        std::memcpy(y, &v.y, sizeof y);
+        std::memcpy(z, &v.z, sizeof z);
+    }
+};
+
 PENUMBRA_LANES_INLINE Lanes3 minus(const Lanes3& a, const Lanes3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 
 // Blender's math::dot, left to right.
@@ -81,14 +106,9 @@ PENUMBRA_LANES_INLINE VecF safe_acos_approx(const VecF& x) {
 // first[k]).
 PENUMBRA_LANES_INLINE Lanes3 corner_positions(const float* positions, const std::uint32_t* corner_vertex,
                                               const std::uint32_t* first, int c) {
-    Lanes3 p;
-    for (int k = 0; k < kLanes; ++k) {
-        const float* q = positions + 3 * std::size_t(corner_vertex[first[k] + c]);
-        p.x[k] = q[0];
-        p.y[k] = q[1];
-        p.z[k] = q[2];
-    }
-    return p;
+    Staging3 p;
+    for (int k = 0; k < kLanes; ++k) p.set(k, positions + 3 * std::size_t(corner_vertex[first[k] + c]));
+    return p.load();
 }
 
 // `lanes` ≤ kLanes faces of Size corners each, one per lane (a short batch
@@ -113,20 +133,22 @@ void face_batch(const std::uint32_t* face_start, const std::uint32_t* corner_ver
     Lanes3 edge[Size];
     for (int c = 0; c < Size; ++c) edge[c] = normalized(minus(p[(c + 1) % Size], p[c]));
     for (int c = 0; c < Size; ++c) {
-        const VecF angle = safe_acos_approx(-dot(edge[(c + Size - 1) % Size], edge[c]));
+        alignas(64) float angle[kLanes];
+        const VecF lanes_angle = safe_acos_approx(-dot(edge[(c + Size - 1) % Size], edge[c]));
+        std::memcpy(angle, &lanes_angle, sizeof angle);
         for (int k = 0; k < lanes; ++k) corner_angles[first[k] + c] = angle[k];
     }
     // normalize_v3: multiply by 1/length; zero → +z.
     const VecF squared = n.x * n.x + n.y * n.y + n.z * n.z;
     const MaskF ok = squared > 1.0e-35f;
     const VecF inverse = 1.0f / sqrt_lanes(ok ? squared : splat(1.0f));
-    const VecF nx = ok ? n.x * inverse : splat(0.0f), ny = ok ? n.y * inverse : splat(0.0f),
-               nz = ok ? n.z * inverse : splat(1.0f);
+    Staging3 normal;
+    normal.store({ok ? n.x * inverse : splat(0.0f), ok ? n.y * inverse : splat(0.0f), ok ? n.z * inverse : splat(1.0f)});
     for (int k = 0; k < lanes; ++k) {
         float* out = face_normals + 3 * std::size_t(faces[k]);
-        out[0] = nx[k];
-        out[1] = ny[k];
-        out[2] = nz[k];
+        out[0] = normal.x[k];
+        out[1] = normal.y[k];
+        out[2] = normal.z[k];
     }
 }
 
@@ -183,7 +205,7 @@ void vertex_normals_range(const std::uint32_t* vertex_start, const std::uint32_t
     // of vertices spent their time gathering), the normalization in lanes.
     for (std::size_t v = begin; v < end; v += kLanes) {
         const int lanes = int(std::min<std::size_t>(kLanes, end - v));
-        Lanes3 sum{splat(0.0f), splat(0.0f), splat(0.0f)};
+        Staging3 sum{};
         for (int k = 0; k < lanes; ++k) {
             const std::size_t vertex = v + std::size_t(k);
             const std::uint32_t from = vertex_start[vertex], to = vertex_start[vertex + 1];
@@ -205,7 +227,8 @@ void vertex_normals_range(const std::uint32_t* vertex_start, const std::uint32_t
             sum.y[k] = y;
             sum.z[k] = z;
         }
-        const Lanes3 n = normalized(sum);
+        Staging3 n;
+        n.store(normalized(sum.load()));
         for (int k = 0; k < lanes; ++k) {
             float* out = normals_out + 3 * (v - begin + std::size_t(k));
             out[0] = n.x[k];
@@ -282,22 +305,19 @@ void frames_batch(const FrameTransform& tr, const float* positions, const std::u
                   std::size_t begin, int count, std::size_t chunk_begin, const float* local_normals,
                   std::size_t stride, float* normals_out, float* tangents_out, float* positions_out,
                   FrameCounts& counts) {
-    Lanes3 local, p, q;
-    MaskF own{};
+    Staging3 local_lanes, p_lanes, q_lanes;
+    alignas(64) std::int32_t own_lanes[kLanes];
     for (int k = 0; k < kLanes; ++k) {
         const std::size_t v = begin + std::size_t(std::min(k, count - 1)), row = v - chunk_begin;
         const std::uint32_t neighbour = neighbours[v];
-        own[k] = neighbour == v ? -1 : 0;
-        local.x[k] = local_normals[3 * row];
-        local.y[k] = local_normals[3 * row + 1];
-        local.z[k] = local_normals[3 * row + 2];
-        p.x[k] = positions[3 * v];
-        p.y[k] = positions[3 * v + 1];
-        p.z[k] = positions[3 * v + 2];
-        q.x[k] = positions[3 * std::size_t(neighbour)];
-        q.y[k] = positions[3 * std::size_t(neighbour) + 1];
-        q.z[k] = positions[3 * std::size_t(neighbour) + 2];
+        own_lanes[k] = neighbour == v ? -1 : 0;
+        local_lanes.set(k, local_normals + 3 * row);
+        p_lanes.set(k, positions + 3 * v);
+        q_lanes.set(k, positions + 3 * std::size_t(neighbour));
     }
+    const Lanes3 local = local_lanes.load(), p = p_lanes.load(), q = q_lanes.load();
+    MaskF own;
+    std::memcpy(&own, own_lanes, sizeof own);
     // The world normal, unit; zero or non-finite → +z.
     Lanes3 n = transform(tr.normal_matrix, local);
     const VecF squared = dot(n, n);
