@@ -198,37 +198,42 @@ void face_normals_range(const std::uint32_t* face_start, const std::uint32_t* co
     }
 }
 
-void vertex_normals_range(const std::uint32_t* vertex_start, const std::uint32_t* incident_face,
-                          const std::uint32_t* incident_corner, const float* positions, const float* face_normals,
-                          const float* corner_angles, std::size_t begin, std::size_t end, float* normals_out) {
-    // The sums one vertex at a time (a vertex's faces vary in number: lanes
-    // of vertices spent their time gathering), the normalization in lanes.
+// The Blender normals (object space) of `lanes` vertices from `begin`: the
+// sums one vertex at a time (a vertex's faces vary in number: lanes of
+// vertices spent their time gathering), the normalization in lanes. Spare
+// lanes hold zeros.
+Lanes3 blender_normals(const NormalSources& sources, const float* positions, std::size_t begin, int lanes) {
+    Staging3 sum{};
+    for (int k = 0; k < lanes; ++k) {
+        const std::size_t vertex = begin + std::size_t(k);
+        const std::uint32_t from = sources.vertex_start[vertex], to = sources.vertex_start[vertex + 1];
+        float x = 0.0f, y = 0.0f, z = 0.0f;
+        if (from == to) {  // a vertex that no face uses: its normalized position
+            x = positions[3 * vertex];
+            y = positions[3 * vertex + 1];
+            z = positions[3 * vertex + 2];
+        }
+        // Σ face normal × corner angle over the faces in ascending order.
+        for (std::uint32_t i = from; i < to; ++i) {
+            const float* f = sources.face_normals + 3 * std::size_t(sources.incident_face[i]);
+            const float angle = sources.corner_angles[sources.incident_corner[i]];
+            x += f[0] * angle;
+            y += f[1] * angle;
+            z += f[2] * angle;
+        }
+        sum.x[k] = x;
+        sum.y[k] = y;
+        sum.z[k] = z;
+    }
+    return normalized(sum.load());
+}
+
+void vertex_normals_range(const NormalSources& sources, const float* positions, std::size_t begin, std::size_t end,
+                          float* normals_out) {
     for (std::size_t v = begin; v < end; v += kLanes) {
         const int lanes = int(std::min<std::size_t>(kLanes, end - v));
-        Staging3 sum{};
-        for (int k = 0; k < lanes; ++k) {
-            const std::size_t vertex = v + std::size_t(k);
-            const std::uint32_t from = vertex_start[vertex], to = vertex_start[vertex + 1];
-            float x = 0.0f, y = 0.0f, z = 0.0f;
-            if (from == to) {  // a vertex that no face uses: its normalized position
-                x = positions[3 * vertex];
-                y = positions[3 * vertex + 1];
-                z = positions[3 * vertex + 2];
-            }
-            // Σ face normal × corner angle over the faces in ascending order.
-            for (std::uint32_t i = from; i < to; ++i) {
-                const float* f = face_normals + 3 * std::size_t(incident_face[i]);
-                const float angle = corner_angles[incident_corner[i]];
-                x += f[0] * angle;
-                y += f[1] * angle;
-                z += f[2] * angle;
-            }
-            sum.x[k] = x;
-            sum.y[k] = y;
-            sum.z[k] = z;
-        }
         Staging3 n;
-        n.store(normalized(sum.load()));
+        n.store(blender_normals(sources, positions, v, lanes));
         for (int k = 0; k < lanes; ++k) {
             float* out = normals_out + 3 * (v - begin + std::size_t(k));
             out[0] = n.x[k];
@@ -301,21 +306,21 @@ PENUMBRA_LANES_INLINE void store_rows(float* rows, std::size_t stride, std::size
 
 // A batch of `count` ≤ kLanes vertices from `begin` (a short batch repeats
 // its last vertex in the spare lanes).
-void frames_batch(const FrameTransform& tr, const float* positions, const std::uint32_t* neighbours,
-                  std::size_t begin, int count, std::size_t chunk_begin, const float* local_normals,
+void frames_batch(const FrameTransform& tr, const NormalSources& sources, const float* positions,
+                  const std::uint32_t* neighbours, std::size_t begin, int count, std::size_t chunk_begin,
                   std::size_t stride, float* normals_out, float* tangents_out, float* positions_out,
                   FrameCounts& counts) {
-    Staging3 local_lanes, p_lanes, q_lanes;
+    const Lanes3 local = blender_normals(sources, positions, begin, count);
+    Staging3 p_lanes, q_lanes;
     alignas(64) std::int32_t own_lanes[kLanes];
     for (int k = 0; k < kLanes; ++k) {
-        const std::size_t v = begin + std::size_t(std::min(k, count - 1)), row = v - chunk_begin;
+        const std::size_t v = begin + std::size_t(std::min(k, count - 1));
         const std::uint32_t neighbour = neighbours[v];
         own_lanes[k] = neighbour == v ? -1 : 0;
-        local_lanes.set(k, local_normals + 3 * row);
         p_lanes.set(k, positions + 3 * v);
         q_lanes.set(k, positions + 3 * std::size_t(neighbour));
     }
-    const Lanes3 local = local_lanes.load(), p = p_lanes.load(), q = q_lanes.load();
+    const Lanes3 p = p_lanes.load(), q = q_lanes.load();
     MaskF own;
     std::memcpy(&own, own_lanes, sizeof own);
     // The world normal, unit; zero or non-finite → +z.
@@ -348,12 +353,12 @@ void frames_batch(const FrameTransform& tr, const float* positions, const std::u
                count);
 }
 
-void frames_range(const FrameTransform& transform, const float* positions, const std::uint32_t* neighbours,
-                  std::size_t begin, std::size_t end, const float* local_normals, std::size_t stride,
+void frames_range(const FrameTransform& transform, const NormalSources& sources, const float* positions,
+                  const std::uint32_t* neighbours, std::size_t begin, std::size_t end, std::size_t stride,
                   float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts) {
     for (std::size_t v = begin; v < end; v += kLanes)
-        frames_batch(transform, positions, neighbours, v, int(std::min<std::size_t>(kLanes, end - v)), begin,
-                     local_normals, stride, normals_out, tangents_out, positions_out, counts);
+        frames_batch(transform, sources, positions, neighbours, v, int(std::min<std::size_t>(kLanes, end - v)), begin,
+                     stride, normals_out, tangents_out, positions_out, counts);
 }
 
 // acc + a·b, fused where the target has FMA (an explicit fma is not
@@ -475,22 +480,20 @@ void face_normals_range(const std::uint32_t* face_start, const std::uint32_t* co
                                              corner_angles);
 }
 
-void vertex_normals_range(const std::uint32_t* vertex_start, const std::uint32_t* incident_face,
-                          const std::uint32_t* incident_corner, const float* positions, const float* face_normals,
-                          const float* corner_angles, std::size_t begin, std::size_t end, float* normals_out) {
-    HWY_DYNAMIC_DISPATCH(vertex_normals_range)(vertex_start, incident_face, incident_corner, positions, face_normals,
-                                               corner_angles, begin, end, normals_out);
+void vertex_normals_range(const NormalSources& sources, const float* positions, std::size_t begin, std::size_t end,
+                          float* normals_out) {
+    HWY_DYNAMIC_DISPATCH(vertex_normals_range)(sources, positions, begin, end, normals_out);
 }
 
 void lobes_from_params(int order, std::size_t count, const float* params, float* axes_out, float* bands_out) {
     HWY_DYNAMIC_DISPATCH(lobes_from_params)(order, count, params, axes_out, bands_out);
 }
 
-void frames_range(const FrameTransform& transform, const float* positions, const std::uint32_t* neighbours,
-                  std::size_t begin, std::size_t end, const float* local_normals, std::size_t stride,
+void frames_range(const FrameTransform& transform, const NormalSources& sources, const float* positions,
+                  const std::uint32_t* neighbours, std::size_t begin, std::size_t end, std::size_t stride,
                   float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts) {
-    HWY_DYNAMIC_DISPATCH(frames_range)(transform, positions, neighbours, begin, end, local_normals, stride,
-                                       normals_out, tangents_out, positions_out, counts);
+    HWY_DYNAMIC_DISPATCH(frames_range)(transform, sources, positions, neighbours, begin, end, stride, normals_out,
+                                       tangents_out, positions_out, counts);
 }
 
 }  // namespace penumbra::visibility::detail

@@ -21,13 +21,22 @@ void face_normals_range(const std::uint32_t* face_start, const std::uint32_t* co
                         const std::uint32_t* faces, std::size_t count, int size, float* face_normals,
                         float* corner_angles);
 
+// What a vertex's Blender normal is made of after the face pass: its faces
+// [vertex_start[v], vertex_start[v + 1]) of incident_face, each weighted by
+// the corner angle incident_corner names.
+struct NormalSources {
+    const std::uint32_t* vertex_start;
+    const std::uint32_t* incident_face;
+    const std::uint32_t* incident_corner;
+    const float* face_normals;
+    const float* corner_angles;
+};
+
 // Blender's vertex normals (object space) of vertices [begin, end) from the
-// face pass: per vertex, its incidences [vertex_start[v], vertex_start[v+1])
-// name a face and the corner whose angle weights it (vertex_normals.hpp).
-// Written to normals_out row v − begin. Bit-identical on every target.
-void vertex_normals_range(const std::uint32_t* vertex_start, const std::uint32_t* incident_face,
-                          const std::uint32_t* incident_corner, const float* positions, const float* face_normals,
-                          const float* corner_angles, std::size_t begin, std::size_t end, float* normals_out);
+// face pass (vertex_normals.hpp's rule), written to normals_out row
+// v − begin. Bit-identical on every target.
+void vertex_normals_range(const NormalSources& sources, const float* positions, std::size_t begin, std::size_t end,
+                          float* normals_out);
 
 // The object's transform: world = linear · p + offset; normals go by
 // normal_matrix (the inverse transpose). Row-major.
@@ -40,15 +49,16 @@ struct FrameCounts {
     std::size_t fallback = 0;  // tangents from the normal alone (mesh_frames.hpp's rule)
 };
 
-// Vertices [begin, end): their object-space normals (count × 3, unit or
-// zero) → world-space unit normals, world positions and unit tangents, each
+// Vertices [begin, end): their Blender normals (object space, from
+// `sources`, as vertex_normals_range makes them) → world-space unit
+// normals, world positions and unit tangents, each
 // as three rows x, y, z `stride` floats apart (sh::PoseBlock's layout;
 // vertex v in column v − begin), by mesh_frames.hpp's rule: the tangent
 // follows the edge to the reference neighbour, projected onto the tangent
 // plane, or Duff et al.'s frame of the normal when that edge is within ~0.06°
 // of the normal (or the vertex is its own neighbour).
-void frames_range(const FrameTransform& transform, const float* positions, const std::uint32_t* neighbours,
-                  std::size_t begin, std::size_t end, const float* local_normals, std::size_t stride,
+void frames_range(const FrameTransform& transform, const NormalSources& sources, const float* positions,
+                  const std::uint32_t* neighbours, std::size_t begin, std::size_t end, std::size_t stride,
                   float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts);
 
 // Lobe parameters (count lobes of 2 + order each: Lambert X, Y, then the

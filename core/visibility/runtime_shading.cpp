@@ -85,7 +85,7 @@ constexpr std::size_t kChunk = 256;
 // target's lanes, ~0.3 ms of work.
 constexpr std::size_t kTask = 4096;
 
-enum Step { kNormals, kFrames, kLobes, kShading, kSteps };
+enum Step { kFrames, kLobes, kShading, kSteps };
 
 // What one frame shares between the tasks.
 struct FrameJob {
@@ -101,13 +101,13 @@ struct FrameJob {
     float* visibility_out;
 };
 
-// Per-chunk arrays: the object-space normals (3 per vertex), then rows of
-// kChunk floats in sh::PoseBlock's layout (zero past a short last chunk).
+// Per-chunk arrays: rows of kChunk floats in sh::PoseBlock's layout (zero
+// past a short last chunk).
 struct ChunkScratch {
     explicit ChunkScratch(const PoseModel& model)
-        : local_normals(3 * kChunk), normals(3 * kChunk), tangents(3 * kChunk), positions(3 * kChunk),
+        : normals(3 * kChunk), tangents(3 * kChunk), positions(3 * kChunk),
           params(kChunk * model.params_per_vertex()), rgb(3 * kChunk), visibility(kChunk) {}
-    std::vector<float> local_normals, normals, tangents, positions, params, rgb, visibility;
+    std::vector<float> normals, tangents, positions, params, rgb, visibility;
 };
 
 struct TaskTotals {
@@ -115,19 +115,13 @@ struct TaskTotals {
     std::size_t invalid = 0, repaired = 0, fallback = 0;
 };
 
-// Blender's normal of each vertex (object space), then world normals,
-// positions and tangents (runtime_kernel.hpp, SIMD lanes).
-void chunk_frames(const FrameJob& job, std::size_t begin, std::size_t end, ChunkScratch& s, TaskTotals& totals,
-                  Clock::time_point& since) {
-    job.mesh.polygons.vertex_normals_of(begin, end, job.positions, job.face_normals, job.corner_angles,
-                                        s.local_normals.data());
-    const auto now = Clock::now();
-    totals.nanoseconds[kNormals] += std::chrono::duration_cast<std::chrono::nanoseconds>(now - since).count();
-    since = now;
+// Blender's normal of each vertex, then world normals, positions and
+// tangents (runtime_kernel.hpp, SIMD lanes).
+void chunk_frames(const FrameJob& job, std::size_t begin, std::size_t end, ChunkScratch& s, TaskTotals& totals) {
     detail::FrameCounts counts;
-    detail::frames_range(job.transform, job.positions, job.mesh.neighbours.data(), begin, end,
-                         s.local_normals.data(), kChunk, s.normals.data(), s.tangents.data(), s.positions.data(),
-                         counts);
+    detail::frames_range(job.transform, job.mesh.polygons.normal_sources(job.face_normals, job.corner_angles),
+                         job.positions, job.mesh.neighbours.data(), begin, end, kChunk, s.normals.data(),
+                         s.tangents.data(), s.positions.data(), counts);
     totals.repaired += counts.repaired;
     totals.fallback += counts.fallback;
 }
@@ -167,7 +161,7 @@ void run_task(const FrameJob& job, std::size_t begin, std::size_t end, TaskTotal
     for (std::size_t chunk = begin; chunk < end; chunk += kChunk) {
         const std::size_t stop = std::min(end, chunk + kChunk);
         auto since = Clock::now();
-        chunk_frames(job, chunk, stop, scratch, totals, since);
+        chunk_frames(job, chunk, stop, scratch, totals);
         add(kFrames, since);
         // The shader reads the lobe parameters and turns them into axes itself.
         synthesize_rows(job.model, job.features, chunk, stop, scratch.params.data(), kChunk);
@@ -245,7 +239,7 @@ FrameResult shade_frame(const PoseModel& model, const sh::PoseShader& shader, co
     for (const double x : thread_seconds) sum += x;
     const double wall = std::chrono::duration<double>(t2 - t1).count();
     const auto share = [&](Step step) { return sum > 0.0 ? wall * thread_seconds[step] / sum : 0.0; };
-    result.timings.normals = std::chrono::duration<double>(t1 - t0).count() + share(kNormals);
+    result.timings.normals = std::chrono::duration<double>(t1 - t0).count();
     result.timings.frames = share(kFrames);
     result.timings.pose_to_lobes = share(kLobes);
     result.timings.shading = share(kShading);

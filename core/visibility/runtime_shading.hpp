@@ -28,9 +28,11 @@
 namespace penumbra::visibility {
 
 struct RuntimeTimings {
-    // Seconds. shade_frame: the fused pass's wall time split in proportion
-    // to the thread time each step took; normals is then Blender's rule
-    // (both passes), frames the world transform and the tangent frame.
+    // Seconds. shade_frame: normals is the face pass (face normals and
+    // corner angles, its own parallel loop); the fused pass's wall time is
+    // split in proportion to the thread time each step took, frames then
+    // being the vertex normals from the face pass, the world transform and
+    // the tangent frames.
     double normals = 0.0;
     double pose_to_lobes = 0.0;  // synthesis + Lambert → axis
     double frames = 0.0;         // tangent frames of the deformed mesh

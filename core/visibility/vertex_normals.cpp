@@ -79,8 +79,7 @@ void PolygonMesh::face_pass(const float* positions, float* face_normals, float* 
 
 void PolygonMesh::vertex_normals_of(std::size_t begin, std::size_t end, const float* positions,
                                     const float* face_normals, const float* corner_angles, float* normals_out) const {
-    detail::vertex_normals_range(vertex_start_.data(), incident_face_.data(), incident_corner_.data(), positions,
-                                 face_normals, corner_angles, begin, end, normals_out);
+    detail::vertex_normals_range(normal_sources(face_normals, corner_angles), positions, begin, end, normals_out);
 }
 
 void PolygonMesh::vertex_normals(const float* positions, float* normals_out, int threads) const {

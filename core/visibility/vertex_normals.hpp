@@ -26,6 +26,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "visibility/runtime_kernel.hpp"
+
 namespace penumbra::visibility {
 
 class PolygonMesh {
@@ -52,6 +54,11 @@ public:
     void face_pass(const float* positions, float* face_normals, float* corner_angles, int threads = 0) const;
     void vertex_normals_of(std::size_t begin, std::size_t end, const float* positions, const float* face_normals,
                            const float* corner_angles, float* normals_out) const;
+    // The per-vertex half for callers with their own loops
+    // (runtime_kernel.hpp): this mesh's incidences and the face pass's output.
+    detail::NormalSources normal_sources(const float* face_normals, const float* corner_angles) const {
+        return {vertex_start_.data(), incident_face_.data(), incident_corner_.data(), face_normals, corner_angles};
+    }
 
 private:
     std::vector<std::uint32_t> face_start_;     // F + 1 offsets into corner_vertex_
