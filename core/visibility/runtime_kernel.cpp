@@ -78,6 +78,14 @@ struct Staging3 {
 
 PENUMBRA_LANES_INLINE Lanes3 minus(const Lanes3& a, const Lanes3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 
+typedef float Quad __attribute__((vector_size(4 * sizeof(float))));
+
+PENUMBRA_LANES_INLINE Quad load_quad(const float* p) {
+    Quad q;
+    std::memcpy(&q, p, sizeof q);
+    return q;
+}
+
 // Blender's math::dot, left to right.
 PENUMBRA_LANES_INLINE VecF dot(const Lanes3& a, const Lanes3& b) {
     VecF r = a.x * b.x;
@@ -213,17 +221,18 @@ Lanes3 blender_normals(const NormalSources& sources, const float* positions, std
             y = positions[3 * vertex + 1];
             z = positions[3 * vertex + 2];
         }
-        // Σ face normal × corner angle over the faces in ascending order.
+        // Σ face normal × corner angle over the faces in ascending order, the
+        // three components side by side in one 4-float vector (the fourth
+        // reads the next face's x, or the padding after the last face, and
+        // is dropped).
+        Quad acc = {x, y, z, 0.0f};
         for (std::uint32_t i = from; i < to; ++i) {
-            const float* f = sources.face_normals + 3 * std::size_t(sources.incident_face[i]);
-            const float angle = sources.corner_angles[sources.incident_corner[i]];
-            x += f[0] * angle;
-            y += f[1] * angle;
-            z += f[2] * angle;
+            const Quad f = load_quad(sources.face_normals + 3 * std::size_t(sources.incident_face[i]));
+            acc += f * (sources.corner_angles[sources.incident_corner[i]] - Quad{});
         }
-        sum.x[k] = x;
-        sum.y[k] = y;
-        sum.z[k] = z;
+        sum.x[k] = acc[0];
+        sum.y[k] = acc[1];
+        sum.z[k] = acc[2];
     }
     return normalized(sum.load());
 }
@@ -279,8 +288,17 @@ void lobes_from_params(int order, std::size_t count, const float* params, float*
     }
 }
 
-// Rows of a row-major 3 × 3 matrix times lane vectors.
-PENUMBRA_LANES_INLINE Lanes3 transform(const float* m, const Lanes3& v) {
+// A row-major 3 × 3 matrix with every entry in all lanes, made once per
+// range (a broadcast per entry per batch was a sixth of the frames' time).
+struct LaneMatrix {
+    VecF m[9];
+    explicit LaneMatrix(const float* entries) {
+        for (int i = 0; i < 9; ++i) m[i] = splat(entries[i]);
+    }
+};
+
+PENUMBRA_LANES_INLINE Lanes3 transform(const LaneMatrix& a, const Lanes3& v) {
+    const VecF* m = a.m;
     return {m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z,
             m[6] * v.x + m[7] * v.y + m[8] * v.z};
 }
@@ -306,7 +324,8 @@ PENUMBRA_LANES_INLINE void store_rows(float* rows, std::size_t stride, std::size
 
 // A batch of `count` ≤ kLanes vertices from `begin` (a short batch repeats
 // its last vertex in the spare lanes).
-void frames_batch(const FrameTransform& tr, const NormalSources& sources, const float* positions,
+void frames_batch(const FrameTransform& tr, const LaneMatrix& linear, const LaneMatrix& normal_matrix,
+                  const NormalSources& sources, const float* positions,
                   const std::uint32_t* neighbours, std::size_t begin, int count, std::size_t chunk_begin,
                   std::size_t stride, float* normals_out, float* tangents_out, float* positions_out,
                   FrameCounts& counts) {
@@ -324,14 +343,14 @@ void frames_batch(const FrameTransform& tr, const NormalSources& sources, const 
     MaskF own;
     std::memcpy(&own, own_lanes, sizeof own);
     // The world normal, unit; zero or non-finite → +z.
-    Lanes3 n = transform(tr.normal_matrix, local);
+    Lanes3 n = transform(normal_matrix, local);
     const VecF squared = dot(n, n);
     const MaskF usable = finite(squared) & (squared > 1e-30f);
     const VecF inverse = 1.0f / sqrt_lanes(usable ? squared : splat(1.0f));
     n = {usable ? n.x * inverse : splat(0.0f), usable ? n.y * inverse : splat(0.0f),
          usable ? n.z * inverse : splat(1.0f)};
-    const Lanes3 world = transform(tr.linear, p);
-    const Lanes3 edge = transform(tr.linear, minus(q, p));
+    const Lanes3 world = transform(linear, p);
+    const Lanes3 edge = transform(linear, minus(q, p));
     // The edge projected onto the tangent plane; within ~0.06° of n it gives
     // no usable direction.
     const VecF along = dot(n, edge);
@@ -356,9 +375,11 @@ void frames_batch(const FrameTransform& tr, const NormalSources& sources, const 
 void frames_range(const FrameTransform& transform, const NormalSources& sources, const float* positions,
                   const std::uint32_t* neighbours, std::size_t begin, std::size_t end, std::size_t stride,
                   float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts) {
+    const LaneMatrix linear(transform.linear), normal_matrix(transform.normal_matrix);
     for (std::size_t v = begin; v < end; v += kLanes)
-        frames_batch(transform, sources, positions, neighbours, v, int(std::min<std::size_t>(kLanes, end - v)), begin,
-                     stride, normals_out, tangents_out, positions_out, counts);
+        frames_batch(transform, linear, normal_matrix, sources, positions, neighbours, v,
+                     int(std::min<std::size_t>(kLanes, end - v)), begin, stride, normals_out, tangents_out,
+                     positions_out, counts);
 }
 
 // acc + a·b, fused where the target has FMA (an explicit fma is not
@@ -369,14 +390,6 @@ PENUMBRA_LANES_INLINE float multiply_add(float a, float b, float acc) {
 #else
     return a * b + acc;
 #endif
-}
-
-typedef float Quad __attribute__((vector_size(4 * sizeof(float))));
-
-PENUMBRA_LANES_INLINE Quad load_quad(const float* p) {
-    Quad q;
-    std::memcpy(&q, p, sizeof q);
-    return q;
 }
 
 PENUMBRA_LANES_INLINE Quad multiply_add(Quad a, Quad b, Quad acc) {

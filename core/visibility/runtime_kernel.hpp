@@ -24,6 +24,7 @@ void face_normals_range(const std::uint32_t* face_start, const std::uint32_t* co
 // What a vertex's Blender normal is made of after the face pass: its faces
 // [vertex_start[v], vertex_start[v + 1]) of incident_face, each weighted by
 // the corner angle incident_corner names.
+// face_normals holds one float past the last face's normal (read, unused).
 struct NormalSources {
     const std::uint32_t* vertex_start;
     const std::uint32_t* incident_face;

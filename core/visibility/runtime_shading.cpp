@@ -189,10 +189,6 @@ detail::FrameTransform frame_transform(const Eigen::Matrix4d& world) {
     return t;
 }
 
-template <typename T>
-std::unique_ptr<T[]> uninitialized(std::size_t n) {
-    return std::unique_ptr<T[]>(new T[n]);
-}
 
 }  // namespace
 
@@ -214,12 +210,15 @@ FrameResult shade_frame(const PoseModel& model, const sh::PoseShader& shader, co
     if (V == 0) return result;
 
     const auto t0 = Clock::now();
-    auto face_normals = uninitialized<float>(3 * mesh.polygons.face_count());
-    auto corner_angles = uninitialized<float>(mesh.polygons.corner_count());
-    mesh.polygons.face_pass(positions, face_normals.get(), corner_angles.get(), parameters.threads);
+    std::lock_guard<std::mutex> lock(mesh.scratch.mutex);
+    std::vector<float>& face_normals = mesh.scratch.face_normals;
+    std::vector<float>& corner_angles = mesh.scratch.corner_angles;
+    face_normals.resize(3 * mesh.polygons.face_count() + 1);  // + 1: NormalSources reads 4 floats a face
+    corner_angles.resize(mesh.polygons.corner_count());
+    mesh.polygons.face_pass(positions, face_normals.data(), corner_angles.data(), parameters.threads);
     const auto t1 = Clock::now();
 
-    FrameJob job{model, mesh, shading, features.data(), positions, face_normals.get(), corner_angles.get(),
+    FrameJob job{model, mesh, shading, features.data(), positions, face_normals.data(), corner_angles.data(),
                  frame_transform(world), rgba_out, visibility_out};
 
     std::vector<TaskTotals> totals(block_count(V, kTask));

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 #include <Eigen/Core>
@@ -63,6 +64,15 @@ struct RuntimeMesh {
                 const std::vector<std::uint32_t>& polygon_vertices);
     PolygonMesh polygons;
     std::vector<std::uint32_t> neighbours;
+
+    // The face pass's output, kept from frame to frame (fresh megabyte-sized
+    // arrays every frame cost page faults); shade_frame holds the mutex, so
+    // calls on one mesh take turns.
+    struct FaceScratch {
+        std::mutex mutex;
+        std::vector<float> face_normals, corner_angles;
+    };
+    mutable FaceScratch scratch;
 };
 
 struct FrameResult {

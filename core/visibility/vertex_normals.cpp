@@ -83,7 +83,7 @@ void PolygonMesh::vertex_normals_of(std::size_t begin, std::size_t end, const fl
 }
 
 void PolygonMesh::vertex_normals(const float* positions, float* normals_out, int threads) const {
-    std::vector<float> face_normals(3 * face_count()), corner_angles(corner_count());
+    std::vector<float> face_normals(3 * face_count() + 1), corner_angles(corner_count());  // + 1: NormalSources
     face_pass(positions, face_normals.data(), corner_angles.data(), threads);
     parallel_for(vertex_count(), {threads, 8192, "visibility.vertex_normals"}, [&](std::size_t begin, std::size_t end) {
         vertex_normals_of(begin, end, positions, face_normals.data(), corner_angles.data(), normals_out + 3 * begin);

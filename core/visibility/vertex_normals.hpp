@@ -48,7 +48,8 @@ public:
     void vertex_normals(const float* positions, float* normals_out, int threads = 0) const;
 
     // The two passes of vertex_normals, for callers that fuse the second
-    // with their own per-vertex work: every face's unit normal (F × 3) and
+    // with their own per-vertex work: every face's unit normal (F × 3, in an
+    // array of 3F + 1 floats: the per-vertex pass reads four at a time) and
     // every corner's angle (C), then the normals of vertices [begin, end)
     // from them (row v − begin of normals_out).
     void face_pass(const float* positions, float* face_normals, float* corner_angles, int threads = 0) const;
