@@ -102,6 +102,102 @@ py::tuple shade(const vis::PoseModel& x, const Floats& joint_rotations, const Fl
                           to_array(result.visibility, {py::ssize_t(x.vertex_count)}), info);
 }
 
+// A float32 array the caller lends for output: C-contiguous, writeable,
+// exactly `shape`; None: a new one.
+py::array_t<float> output_array(const py::object& given, const std::vector<py::ssize_t>& shape, const char* what) {
+    if (given.is_none()) return py::array_t<float>(shape);
+    const auto array = py::array::ensure(given);
+    bool fits = array && array.dtype().is(py::dtype::of<float>()) && (array.flags() & py::array::c_style) &&
+                array.writeable() && array.ndim() == py::ssize_t(shape.size());
+    for (std::size_t k = 0; fits && k < shape.size(); ++k) fits = array.shape(py::ssize_t(k)) == shape[k];
+    if (!fits) {
+        std::string wanted;
+        for (const auto n : shape) wanted += (wanted.empty() ? "" : ", ") + std::to_string(n);
+        throw py::value_error(std::string(what) + " must be a writeable C-contiguous float32 array of shape (" +
+                              wanted + (shape.size() == 1 ? ",)" : ")") + ", got " +
+                              (array ? shape_of(array) + " " + std::string(py::str(array.dtype())) : "another type"));
+    }
+    return py::reinterpret_borrow<py::array_t<float>>(array);
+}
+
+// The evaluated mesh's (V, 3) float32 positions without a copy when they
+// already are float32 and C-ordered (Floats converts anything else once).
+const float* positions_of(const Floats& positions, std::size_t V) {
+    const bool fits = (positions.ndim() == 2 && positions.shape(0) == py::ssize_t(V) && positions.shape(1) == 3) ||
+                      (positions.ndim() == 1 && positions.shape(0) == py::ssize_t(3 * V));
+    if (!fits)
+        throw py::value_error("positions must be (" + std::to_string(V) + ", 3), got " + shape_of(positions));
+    return positions.data();
+}
+
+py::tuple shade_frame(const vis::PoseModel& x, const vis::RuntimeMesh& mesh, const Floats& joint_rotations,
+                      const Floats& positions, const Doubles& world, const Doubles& lighting, sh::ShadingModel model,
+                      double phong_exponent, const std::array<double, 3>& camera,
+                      const std::array<double, 3>& transmission, int threads, const py::object& rgba_out,
+                      const py::object& visibility_out) {
+    const auto r = rotations(joint_rotations, x.joints.size(), "joint_rotations");
+    const std::size_t V = x.vertex_count;
+    const float* p = positions_of(positions, V);
+    if (world.ndim() != 2 || world.shape(0) != 4 || world.shape(1) != 4)
+        throw py::value_error("world must be a 4 × 4 matrix, got " + shape_of(world));
+    Eigen::Matrix4d w;
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) w(i, j) = world.at(i, j);
+    const py::ssize_t n_sh = py::ssize_t(x.order) * x.order;
+    if (lighting.ndim() != 2 || lighting.shape(0) != n_sh || lighting.shape(1) != 3)
+        throw py::value_error("lighting must have shape (" + std::to_string(n_sh) + ", 3), got " + shape_of(lighting));
+    Eigen::MatrixXd l(n_sh, 3);
+    for (py::ssize_t i = 0; i < n_sh; ++i)
+        for (int c = 0; c < 3; ++c) l(i, c) = lighting.at(i, c);
+    sh::ShadingParameters sp;
+    sp.model = model;
+    sp.phong_exponent = phong_exponent;
+    sp.camera = Eigen::Vector3d(camera[0], camera[1], camera[2]);
+    sp.transmission = transmission;
+    sp.threads = threads;
+    auto rgba = output_array(rgba_out, {py::ssize_t(V), 4}, "rgba_out");
+    auto visibility = output_array(visibility_out, {py::ssize_t(V)}, "visibility_out");
+    float* rgba_data = rgba.mutable_data();
+    float* visibility_data = visibility.mutable_data();
+    vis::FrameResult result;
+    {
+        py::gil_scoped_release release;
+        const auto shader = shader_for(x.order);
+        result = vis::shade_frame(x, *shader, mesh, r.data(), p, w, l, sp, rgba_data, visibility_data);
+    }
+    py::dict info;
+    info["seconds_normals"] = result.timings.normals;
+    info["seconds_pose_to_lobes"] = result.timings.pose_to_lobes;
+    info["seconds_frames"] = result.timings.frames;
+    info["seconds_shading"] = result.timings.shading;
+    info["invalid_vertices"] = result.stats.invalid_vertices;
+    info["repaired_normals"] = result.frame_stats.repaired_normals;
+    return py::make_tuple(rgba, visibility, info);
+}
+
+void bind_runtime_mesh(py::module_& m) {
+    py::class_<vis::RuntimeMesh, std::shared_ptr<vis::RuntimeMesh>>(m, "RuntimeMesh",
+        "What the run time keeps of a mesh between frames: its polygons (for Blender's vertex normals) and the "
+        "reference neighbours of the bake's frames.")
+        .def(py::init([](std::size_t vertex_count, const Indices& polygon_sizes, const Indices& polygon_vertices) {
+            return std::make_shared<vis::RuntimeMesh>(vertex_count, indices(polygon_sizes, "polygon_sizes", false),
+                                                      indices(polygon_vertices, "polygon_vertices", false));
+        }), py::arg("vertex_count"), py::arg("polygon_sizes"), py::arg("polygon_vertices"))
+        .def_property_readonly("vertex_count", [](const vis::RuntimeMesh& x) { return x.polygons.vertex_count(); })
+        .def("vertex_normals", [](const vis::RuntimeMesh& x, const Floats& positions, int threads) {
+            const float* p = positions_of(positions, x.polygons.vertex_count());
+            py::array_t<float> out({py::ssize_t(x.polygons.vertex_count()), py::ssize_t(3)});
+            float* o = out.mutable_data();
+            {
+                py::gil_scoped_release release;
+                x.polygons.vertex_normals(p, o, threads);
+            }
+            return out;
+        }, py::arg("positions"), py::arg("threads") = 0,
+           "Vertex normals (V, 3) float32 of the mesh at `positions` by Blender 4.x/5.x's rule "
+           "(core/visibility/vertex_normals.hpp): bit-identical to Blender's own there.");
+}
+
 void bind_properties(py::class_<vis::PoseModel, Model>& c) {
     c.def_property_readonly("order", [](const vis::PoseModel& x) { return x.order; })
         .def_property_readonly("lobes", [](const vis::PoseModel& x) { return x.lobes; })
@@ -163,6 +259,16 @@ void bind_pose_model(py::module_& m) {
           "The whole run time for one pose: lobes from the pose, frames from the deformed mesh, shading with the SH "
           "engine under lighting (order², 3) with `model` (sh.ShadingModel, or its name). Returns (rgb (V, 3) "
           "float32, ao (V,) float32, info with timings).");
+    c.def("shade_frame", &shade_frame, py::arg("mesh"), py::arg("joint_rotations"), py::arg("positions"),
+          py::arg("world"), py::arg("lighting"), py::arg("model") = shading.model,
+          py::arg("phong_exponent") = shading.phong_exponent,
+          py::arg("camera") = std::array<double, 3>{shading.camera[0], shading.camera[1], shading.camera[2]},
+          py::arg("transmission") = shading.transmission, py::arg("threads") = bake.threads,
+          py::arg("rgba_out") = py::none(), py::arg("visibility_out") = py::none(),
+          "The run time for one frame (what the handler calls): the evaluated mesh's object-space positions (V, 3) "
+          "and world matrix (4, 4) in, normals by Blender's rule, every per-vertex step fused. Returns (rgba (V, 4) "
+          "float32: RGB clamped >= 0, alpha 1; ao (V,) float32 clamped to [0, 1]; info with timings), written into "
+          "rgba_out / visibility_out when given (float32, C-contiguous, exact shape).");
 }
 
 py::dict report_dict(const vis::FitReport& report) {
@@ -228,6 +334,7 @@ py::tuple fit_model(const vis::TrainingSet& set, const std::vector<std::pair<boo
 }  // namespace
 
 void bind_visibility_model(py::module_& m) {
+    bind_runtime_mesh(m);
     bind_pose_model(m);
     const vis::FitSettings fit;  // every default below is the core's own
     m.def("fit_model", &fit_model, py::arg("training_set"), py::arg("bone_influence"), py::arg("lobes") = fit.lobes,

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 
@@ -33,6 +34,44 @@ detail::RangeFunction<Real> range_function(int order) {
 
 }  // namespace
 
+namespace detail {
+
+PoseShadingSetup<float> to_float(const PoseShadingSetup<double>& d) {
+    const auto round = [](const auto& from, auto& to) {
+        for (std::size_t i = 0; i < from.size(); ++i) to[i] = float(from[i]);
+    };
+    PoseShadingSetup<float> f;
+    f.order = d.order;
+    f.lobes = d.lobes;
+    f.model = d.model;
+    f.want_visibility = d.want_visibility;
+    f.block_offset = d.block_offset;
+    f.x_columns = d.x_columns;
+    f.xt_columns = d.xt_columns;
+    f.blocks.resize(d.blocks.size());
+    f.x_values.resize(d.x_values.size());
+    f.xt_values.resize(d.xt_values.size());
+    f.lighting.resize(d.lighting.size());
+    f.back.resize(d.back.size());
+    round(d.camera, f.camera);
+    round(d.blocks, f.blocks);
+    round(d.x_values, f.x_values);
+    round(d.xt_values, f.xt_values);
+    for (std::size_t i = 0; i < d.lighting.size(); ++i) {
+        round(d.lighting[i], f.lighting[i]);
+        round(d.back[i], f.back[i]);
+    }
+    round(d.zh_scale, f.zh_scale);
+    round(d.ao_weight, f.ao_weight);
+    round(d.legendre_diagonal, f.legendre_diagonal);
+    round(d.legendre_first, f.legendre_first);
+    round(d.legendre_a, f.legendre_a);
+    round(d.legendre_b, f.legendre_b);
+    return f;
+}
+
+}  // namespace detail
+
 PoseShader::PoseShader(int order) : order_(order) {
     check_order(order);
     diffuse_ = std::make_shared<const ZonalOperator>(diffuse_zonal_operator(order));
@@ -54,6 +93,15 @@ PoseShader::PoseShader(int order) : order_(order) {
         return a.row != b.row ? a.row < b.row : a.column < b.column;
     };
     std::sort(quarter_turn_transposed_.begin(), quarter_turn_transposed_.end(), by_row);
+    // The kernel stores quarter_turn_width(l) entries per row of band l.
+    for (const std::vector<SparseEntry>* entries : {&quarter_turn_, &quarter_turn_transposed_}) {
+        std::vector<int> per_row(std::size_t(order) * order, 0);
+        for (const SparseEntry& e : *entries) ++per_row[e.row];
+        for (int l = 0; l < order; ++l)
+            for (int i = l * l; i < (l + 1) * (l + 1); ++i)
+                if (per_row[i] > detail::quarter_turn_width(l))
+                    throw std::logic_error("pose shading: a row of the 90° SH rotation has more non-zeros than stored");
+    }
 
     // h_l = ∫_{S²} (1/π) max(0, cosθ) y_l0 = √(4π) T_d[l0, 00] (y_00 = 1/√(4π)).
     for (int l = 0; l < order; ++l)
@@ -76,42 +124,73 @@ std::shared_ptr<const ZonalOperator> PoseShader::operator_for(ShadingModel model
     return made;
 }
 
-template <typename Real>
-ShadingStats PoseShader::shade_impl(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters,
-                                    const PoseBuffers<Real>& buffers) const {
+void PoseShader::check_call(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters, int lobes) const {
     const int coefficients = coefficient_count(order_);
     if (lighting.rows() != coefficients || lighting.cols() != 3)
         throw ArgumentError("lighting must have shape (order², 3) = (" + std::to_string(coefficients) +
                             ", 3), got (" + std::to_string(lighting.rows()) + ", " +
                             std::to_string(lighting.cols()) + ")");
     if (!lighting.allFinite()) throw ArgumentError("lighting has a NaN or infinite coefficient");
-    if (buffers.lobes_per_vertex < 1)
-        throw ArgumentError("each vertex needs at least one ZH lobe, got " +
-                            std::to_string(buffers.lobes_per_vertex));
+    if (lobes < 1) throw ArgumentError("each vertex needs at least one ZH lobe, got " + std::to_string(lobes));
     if (parameters.threads < 0)
         throw ArgumentError("threads must be >= 0 (0 = all cores), got " + std::to_string(parameters.threads));
-    const bool phong = parameters.model == ShadingModel::phong;
-    if (phong && !parameters.camera.allFinite()) throw ArgumentError("the camera position must be finite");
+    if (parameters.model == ShadingModel::phong && !parameters.camera.allFinite())
+        throw ArgumentError("the camera position must be finite");
     for (const double e : parameters.transmission)
         if (!std::isfinite(e)) throw ArgumentError("the transmission colour must be finite");
-    if (buffers.vertex_count == 0) return {};
-    if (!buffers.lobe_axes || !buffers.lobe_bands || !buffers.normals || !buffers.tangents || !buffers.rgb)
-        throw ArgumentError("pose shading needs lobe axes, lobe bands, normals, tangents and an output");
-    if (phong && !buffers.positions) throw ArgumentError("Phong shading needs vertex positions (local viewer)");
-
-    const std::shared_ptr<const ZonalOperator> op = operator_for(parameters.model, parameters.phong_exponent);
-    return run_threads(make_setup(*op, lighting, parameters, buffers.lobes_per_vertex, buffers.visibility != nullptr),
-                       buffers, parameters.threads);
 }
 
-PoseShadingSetup PoseShader::make_setup(const ZonalOperator& op, const Eigen::MatrixXd& lighting,
-                                        const ShadingParameters& parameters, int lobes, bool want_visibility) const {
+template <typename Real>
+ShadingStats PoseShader::shade_impl(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters,
+                                    const PoseBuffers<Real>& buffers) const {
+    check_call(lighting, parameters, buffers.lobes_per_vertex);
+    if (buffers.vertex_count == 0) return {};
+    if (!((buffers.lobe_axes && buffers.lobe_bands) || buffers.lobe_params) || !buffers.normals ||
+        !buffers.tangents || !buffers.rgb)
+        throw ArgumentError("pose shading needs lobe axes and bands (or lobe parameters), normals, tangents and an output");
+    if (parameters.model == ShadingModel::phong && !buffers.positions)
+        throw ArgumentError("Phong shading needs vertex positions (local viewer)");
+
+    const std::shared_ptr<const ZonalOperator> op = operator_for(parameters.model, parameters.phong_exponent);
+    const PoseShadingSetup<double> setup =
+        make_setup(*op, lighting, parameters, buffers.lobes_per_vertex, buffers.visibility != nullptr);
+    if constexpr (std::is_same_v<Real, float>) return run_threads(detail::to_float(setup), buffers, parameters.threads);
+    else return run_threads(setup, buffers, parameters.threads);
+}
+
+PreparedShading PoseShader::prepare(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters, int lobes,
+                                    bool want_visibility) const {
+    check_call(lighting, parameters, lobes);
+    const std::shared_ptr<const ZonalOperator> op = operator_for(parameters.model, parameters.phong_exponent);
+    PreparedShading prepared;
+    prepared.setup_ = std::make_shared<const PoseShadingSetup<float>>(
+        detail::to_float(make_setup(*op, lighting, parameters, lobes, want_visibility)));
+    prepared.run_ = range_function<float>(order_);
+    prepared.run_block_ = detail::block_function(order_);
+    return prepared;
+}
+
+std::size_t PreparedShading::shade_block(const PoseBlock& block) const {
+    std::size_t invalid = 0;
+    if (block.vertex_count) run_block_(*setup_, block, invalid);
+    return invalid;
+}
+
+std::size_t PreparedShading::shade_range(const PoseBuffers<float>& buffers, std::size_t begin, std::size_t end) const {
+    std::size_t invalid = 0;
+    if (begin < end) run_(*setup_, buffers, begin, end, invalid);
+    return invalid;
+}
+
+PoseShadingSetup<double> PoseShader::make_setup(const ZonalOperator& op, const Eigen::MatrixXd& lighting,
+                                                const ShadingParameters& parameters, int lobes,
+                                                bool want_visibility) const {
     const int coefficients = coefficient_count(order_);
-    PoseShadingSetup setup;
+    PoseShadingSetup<double> setup;
     setup.order = order_;
     setup.lobes = lobes;
     setup.model = parameters.model;
-    setup.camera = parameters.camera;
+    setup.camera = {parameters.camera.x(), parameters.camera.y(), parameters.camera.z()};
     setup.want_visibility = want_visibility;
     for (int a = 0; a < order_; ++a) {
         setup.block_offset[a] = int(setup.blocks.size());
@@ -119,17 +198,32 @@ PoseShadingSetup PoseShader::make_setup(const ZonalOperator& op, const Eigen::Ma
         for (int i = 0; i < block.rows(); ++i)
             for (int j = 0; j < block.cols(); ++j) setup.blocks.push_back(block(i, j));
     }
-    for (const SparseEntry& e : quarter_turn_) {
-        setup.x_rows.push_back(e.row);
-        setup.x_columns.push_back(e.column);
-        setup.x_values.push_back(e.value);
-    }
-    for (const SparseEntry& e : quarter_turn_transposed_) {
-        setup.xt_rows.push_back(e.row);
-        setup.xt_columns.push_back(e.column);
-        setup.xt_values.push_back(e.value);
-    }
-    setup.legendre = legendre_recurrence();
+    // Both lists are sorted by row (then column): pad every row of band l
+    // to quarter_turn_width(l) entries (zeros pointing at the band's first
+    // coefficient).
+    const auto pad_rows = [this](const std::vector<SparseEntry>& entries, std::vector<int>& columns,
+                                 std::vector<double>& values) {
+        std::size_t e = 0;
+        for (int l = 0; l < order_; ++l)
+            for (int i = l * l; i < (l + 1) * (l + 1); ++i) {
+                int stored = 0;
+                for (; e < entries.size() && entries[e].row == i; ++e, ++stored) {
+                    columns.push_back(entries[e].column);
+                    values.push_back(entries[e].value);
+                }
+                for (; stored < detail::quarter_turn_width(l); ++stored) {
+                    columns.push_back(l * l);
+                    values.push_back(0.0);
+                }
+            }
+    };
+    pad_rows(quarter_turn_, setup.x_columns, setup.x_values);
+    pad_rows(quarter_turn_transposed_, setup.xt_columns, setup.xt_values);
+    const LegendreRecurrence& legendre = legendre_recurrence();
+    setup.legendre_diagonal = legendre.diagonal;
+    setup.legendre_first = legendre.first;
+    setup.legendre_a = legendre.a;
+    setup.legendre_b = legendre.b;
     setup.lighting.resize(coefficients);
     setup.back.resize(coefficients);
     for (int l = 0; l < order_; ++l) {
@@ -150,7 +244,8 @@ PoseShadingSetup PoseShader::make_setup(const ZonalOperator& op, const Eigen::Ma
 }
 
 template <typename Real>
-ShadingStats PoseShader::run_threads(const PoseShadingSetup& setup, const PoseBuffers<Real>& buffers, int thread_count) {
+ShadingStats PoseShader::run_threads(const PoseShadingSetup<Real>& setup, const PoseBuffers<Real>& buffers,
+                                     int thread_count) {
     // Blocks of kBlock vertices, a multiple of every target's lanes (1–8),
     // large enough that scheduling one (~1 µs) is lost in its ~0.1 ms of
     // shading.

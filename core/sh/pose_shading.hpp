@@ -44,8 +44,9 @@
 // D(F') = Dz(φ) · Xᵀ · Dz(θ) · X with X the fixed SH rotation of a 90° turn
 // about x (Ry(θ) = Rx(90°)ᵀ Rz(θ) Rx(90°)) and Dz cheap (cos/sin of mφ):
 // shade_c = l_cᵀ D(F') u. Vertices go in batches of one SIMD register of
-// doubles, threads take contiguous ranges, nothing is allocated per vertex.
-// All arithmetic is double, whatever the buffers' type.
+// the buffers' precision, threads take contiguous ranges, nothing is
+// allocated per vertex. Float buffers are shaded in float (twice the SIMD
+// lanes; within 3e-5 of double, tested), double buffers in double.
 #pragma once
 
 #include <array>
@@ -65,6 +66,7 @@
 namespace penumbra::sh {
 
 namespace detail {
+template <typename S>
 struct PoseShadingSetup;
 }  // namespace detail
 
@@ -85,7 +87,7 @@ struct ShadingParameters {
 };
 
 // Views into caller-owned, row-major arrays for N vertices with C lobes each.
-// Real is float or double; the arithmetic is double either way.
+// Real is float or double, and so is the arithmetic.
 template <typename Real>
 struct PoseBuffers {
     std::size_t vertex_count = 0;      // N
@@ -98,6 +100,11 @@ struct PoseBuffers {
     Real* rgb = nullptr;               // (N, 3) output
     Real* visibility = nullptr;        // (N,) optional output: cosine-weighted
                                        // visibility (1/π)∫_H (ω·n) V, the AO
+    // Instead of lobe_axes and lobe_bands: (N, C, 2 + order), the visibility
+    // model's lobe parameters (visibility/zh_fit.hpp: the axis as Lambert
+    // azimuthal equal-area (X, Y) about +z, then the bands), turned into axes
+    // in the lanes (a non-finite (X, Y) gives +z, as lambert_to_axis does).
+    const Real* lobe_params = nullptr;
 };
 
 // A vertex is invalid when its normal is zero or non-finite, its tangent is
@@ -108,6 +115,50 @@ struct PoseBuffers {
 // visibility 0) and is counted here; it never throws.
 struct ShadingStats {
     std::size_t invalid_vertices = 0;
+};
+
+// One block of float inputs in structure-of-arrays layout: each component a
+// row of its own, rows `stride` floats apart, so the kernel loads whole lane
+// vectors instead of gathering every lane. What the run time writes
+// (visibility/runtime_shading.cpp). Every row must be readable and writable
+// up to vertex_count rounded up to a multiple of 16 (the widest lanes); the
+// values past vertex_count are read, shaded and discarded, so keep them
+// finite (zeros are best: they cost nothing extra). The frames must be
+// orthonormal already (unit normals, unit tangents orthogonal to them, as
+// the run time's are): a block skips the normalization and Gram–Schmidt,
+// and only a non-finite position (Phong) or band makes a vertex invalid.
+struct PoseBlock {
+    std::size_t vertex_count = 0;
+    std::size_t stride = 0;
+    const float* normals = nullptr;      // 3 rows x, y, z (world)
+    const float* tangents = nullptr;     // 3 rows (world)
+    const float* positions = nullptr;    // 3 rows (world; Phong)
+    const float* lobe_params = nullptr;  // lobes × (2 + order) rows, as PoseBuffers::lobe_params by component
+    float* rgb = nullptr;                // 3 rows, output
+    float* visibility = nullptr;         // 1 row, output (optional)
+};
+
+class PoseShader;
+
+// One call's constants (operator, lighting, rotation tables, the kernel for
+// this CPU), made once by PoseShader::prepare and used for any number of
+// vertex ranges: the run time (visibility/runtime_shading.hpp) fuses the
+// shading with its other per-vertex steps, block by block. Immutable, so
+// several threads may shade ranges at once.
+class PreparedShading {
+public:
+    // Shades vertices [begin, end) of `buffers` (lobes_per_vertex as
+    // prepared; positions needed for Phong); returns how many were invalid.
+    std::size_t shade_range(const PoseBuffers<float>& buffers, std::size_t begin, std::size_t end) const;
+    // The same for a block in structure-of-arrays layout.
+    std::size_t shade_block(const PoseBlock& block) const;
+
+private:
+    friend class PoseShader;
+    std::shared_ptr<const detail::PoseShadingSetup<float>> setup_;
+    void (*run_)(const detail::PoseShadingSetup<float>&, const PoseBuffers<float>&, std::size_t, std::size_t,
+                 std::size_t&) = nullptr;
+    void (*run_block_)(const detail::PoseShadingSetup<float>&, const PoseBlock&, std::size_t&) = nullptr;
 };
 
 class PoseShader {
@@ -128,6 +179,11 @@ public:
     ShadingStats shade(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters,
                        const PoseBuffers<double>& buffers) const;
 
+    // shade()'s checks and set-up without the buffers, for PreparedShading.
+    // Throws as shade() does for the lighting and parameters.
+    PreparedShading prepare(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters, int lobes,
+                            bool want_visibility) const;
+
     // The operator T a model uses: the diffuse operator for diffuse and
     // translucent, phong_zonal_operator(order, α) for phong (cached per
     // exponent; the cache is emptied when it holds 16).
@@ -143,14 +199,15 @@ private:
         double value;
     };
 
+    void check_call(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters, int lobes) const;
     template <typename Real>
     ShadingStats shade_impl(const Eigen::MatrixXd& lighting, const ShadingParameters& parameters,
                             const PoseBuffers<Real>& buffers) const;
-    detail::PoseShadingSetup make_setup(const ZonalOperator& op, const Eigen::MatrixXd& lighting,
-                                        const ShadingParameters& parameters, int lobes,
-                                        bool want_visibility) const;
+    detail::PoseShadingSetup<double> make_setup(const ZonalOperator& op, const Eigen::MatrixXd& lighting,
+                                                const ShadingParameters& parameters, int lobes,
+                                                bool want_visibility) const;
     template <typename Real>
-    static ShadingStats run_threads(const detail::PoseShadingSetup& setup, const PoseBuffers<Real>& buffers,
+    static ShadingStats run_threads(const detail::PoseShadingSetup<Real>& setup, const PoseBuffers<Real>& buffers,
                                     int thread_count);
 
     int order_;

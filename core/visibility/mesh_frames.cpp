@@ -70,6 +70,26 @@ void basis_from_normal(const Eigen::Vector3d& n, Eigen::Vector3d& t, Eigen::Vect
     b = Eigen::Vector3d(c, sign + n.y() * n.y() * a, -n.y());
 }
 
+bool vertex_frame(const Eigen::Vector3d& n, const Eigen::Vector3d& edge_vector, bool has_neighbour, float* out) {
+    Eigen::Vector3d t = edge_vector - n * n.dot(edge_vector);
+    Eigen::Vector3d b;
+    const double length = t.norm();
+    // An edge within ~0.06° of the normal gives no usable direction.
+    const bool from_edge = has_neighbour && length > 1e-3 * edge_vector.norm() && std::isfinite(length);
+    if (from_edge) {
+        t /= length;
+        b = n.cross(t);
+    } else {
+        basis_from_normal(n, t, b);
+    }
+    for (int k = 0; k < 3; ++k) {
+        out[k] = float(t[k]);
+        out[3 + k] = float(b[k]);
+        out[6 + k] = float(n[k]);
+    }
+    return from_edge;
+}
+
 void vertex_frames(const std::vector<float>& positions, const std::vector<float>& normals,
                    const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>& neighbours,
                    float* frames_out, FrameStats* stats, int threads) {
@@ -82,25 +102,8 @@ void vertex_frames(const std::vector<float>& positions, const std::vector<float>
     // One vertex's frame from its unit normal n; false when t fell back to
     // the frame of n alone.
     const auto write_frame = [&](std::size_t v, const Eigen::Vector3d& n) {
-        const Eigen::Vector3d edge_vector = vec(positions, neighbours[v]) - vec(positions, v);
-        Eigen::Vector3d t = edge_vector - n * n.dot(edge_vector);
-        Eigen::Vector3d b;
-        const double length = t.norm();
-        // An edge within ~0.06° of the normal gives no usable direction.
-        const bool from_edge = neighbours[v] != v && length > 1e-3 * edge_vector.norm() && std::isfinite(length);
-        if (from_edge) {
-            t /= length;
-            b = n.cross(t);
-        } else {
-            basis_from_normal(n, t, b);
-        }
-        float* out = frames_out + 9 * v;
-        for (int k = 0; k < 3; ++k) {
-            out[k] = float(t[k]);
-            out[3 + k] = float(b[k]);
-            out[6 + k] = float(n[k]);
-        }
-        return from_edge;
+        return vertex_frame(n, vec(positions, neighbours[v]) - vec(positions, v), neighbours[v] != v,
+                            frames_out + 9 * v);
     };
     // Every vertex whose normal Blender reports usable, in parallel (one pass,
     // no copy of the normals); the rest are repaired below.

@@ -46,6 +46,11 @@ void vertex_frames(const std::vector<float>& positions, const std::vector<float>
                    const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>& neighbours,
                    float* frames_out, FrameStats* stats = nullptr, int threads = 1);
 
+// One vertex's frame (what vertex_frames writes for it) from its unit normal
+// n and the vector to its reference neighbour (has_neighbour false: the
+// vertex is its own); false when t fell back to the frame of n alone.
+bool vertex_frame(const Eigen::Vector3d& n, const Eigen::Vector3d& edge_vector, bool has_neighbour, float* out);
+
 // Duff et al. 2017, "Building an Orthonormal Basis, Revisited": t, b from n.
 void basis_from_normal(const Eigen::Vector3d& n, Eigen::Vector3d& t, Eigen::Vector3d& b);
 

@@ -19,6 +19,7 @@
 #include "sh/brdf_operator.hpp"
 #include "common/parallel.hpp"
 #include "visibility/ridge_curve.hpp"
+#include "visibility/runtime_kernel.hpp"
 
 namespace penumbra::visibility {
 
@@ -676,9 +677,8 @@ void synthesize_params(const PoseModel& model, const float* joint_rotations, flo
     synthesize_lobes(model, joint_rotations, params_out, nullptr, nullptr, threads);
 }
 
-void synthesize_lobes(const PoseModel& model, const float* joint_rotations, float* params_out, float* axes_out,
-                      float* bands_out, int threads) {
-    const int d = model.params_per_vertex(), fpj = features_per_joint(model.features);
+std::vector<float> pose_features(const PoseModel& model, const float* joint_rotations) {
+    const int fpj = features_per_joint(model.features);
     std::vector<double> phi(model.joints.size() * fpj);
     for (std::size_t j = 0; j < model.joints.size(); ++j) {
         for (int k = 0; k < 9; ++k)
@@ -688,22 +688,32 @@ void synthesize_lobes(const PoseModel& model, const float* joint_rotations, floa
     }
     // Single precision, like the stored weights and the output: at most a few
     // dozen products per parameter, and the loop vectorizes.
-    const std::vector<float> phi_f(phi.begin(), phi.end());
+    return std::vector<float>(phi.begin(), phi.end());
+}
+
+void synthesize_range(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
+                      float* params_out) {
+    // A vertex the model stores as constant has no joint blocks: its
+    // parameters are the bias alone. The loop is runtime_kernel.cpp's (SIMD
+    // targets chosen at run time).
+    detail::synthesize_range(model.params_per_vertex(), features_per_joint(model.features), model.joint_offsets.data(),
+                             model.joint_index.data(), model.bias.data(), model.weights.data(), features, begin, end,
+                             params_out);
+}
+
+void synthesize_rows(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
+                     float* params_out, std::size_t stride) {
+    detail::synthesize_range(model.params_per_vertex(), features_per_joint(model.features), model.joint_offsets.data(),
+                             model.joint_index.data(), model.bias.data(), model.weights.data(), features, begin, end,
+                             params_out, std::max<std::size_t>(stride, 1));
+}
+
+void synthesize_lobes(const PoseModel& model, const float* joint_rotations, float* params_out, float* axes_out,
+                      float* bands_out, int threads) {
+    const int d = model.params_per_vertex();
+    const std::vector<float> features = pose_features(model, joint_rotations);
     parallel_for(model.vertex_count, {threads, 2048, "visibility.pose_lobes"}, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t v = begin; v < end; ++v) {
-            float* acc = params_out + v * d;
-            const float* bias = model.bias.data() + v * d;
-            for (int i = 0; i < d; ++i) acc[i] = bias[i];
-            for (std::uint32_t e = model.joint_offsets[v]; e < model.joint_offsets[v + 1]; ++e) {
-                const float* f = phi_f.data() + std::size_t(model.joint_index[e]) * fpj;
-                const float* w = model.weights.data() + std::size_t(e) * fpj * d;
-                for (int a = 0; a < fpj; ++a) {
-                    const float fa = f[a];
-                    const float* wa = w + a * d;
-                    for (int i = 0; i < d; ++i) acc[i] += fa * wa[i];
-                }
-            }
-        }
+        synthesize_range(model, features.data(), begin, end, params_out + begin * d);
         if (axes_out && bands_out)
             params_to_lobes(model.order, model.lobes, end - begin, params_out + begin * d,
                             axes_out + begin * model.lobes * 3, bands_out + begin * model.lobes * model.order);
@@ -712,16 +722,8 @@ void synthesize_lobes(const PoseModel& model, const float* joint_rotations, floa
 
 void params_to_lobes(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
                      float* bands_out) {
-    const int ppl = params_per_lobe(order);
-    for (std::size_t v = 0; v < vertex_count; ++v)
-        for (int x = 0; x < lobes; ++x) {
-            const float* p = params + (v * lobes + x) * ppl;
-            const Eigen::Vector3d axis = lambert_to_axis(p[0], p[1]);
-            float* a = axes_out + (v * lobes + x) * 3;
-            for (int k = 0; k < 3; ++k) a[k] = float(axis[k]);
-            float* b = bands_out + (v * lobes + x) * order;
-            for (int l = 0; l < order; ++l) b[l] = p[2 + l];
-        }
+    // lambert_to_axis (zh_fit.hpp) in float SIMD lanes (runtime_kernel.cpp).
+    detail::lobes_from_params(order, vertex_count * std::size_t(lobes), params, axes_out, bands_out);
 }
 
 Errors evaluate_pose_model(const PoseModel& model, const TrainingSet& set, int threads) {

@@ -47,7 +47,9 @@ def test_bake_visibility(addon, tmp_path, kind):
     assert os.path.isfile(model)
 
 
-@pytest.mark.parametrize("stage", ["visibility.pose_lobes", "sh.pose_shading"])
+# The run time's parallel stages: Blender's face normals, then the fused pass
+# (normals, frames, lobes, shading) over blocks of vertices.
+@pytest.mark.parametrize("stage", ["visibility.face_normals", "visibility.runtime_frame"])
 def test_apply_visibility(addon, tmp_path, stage):
     obj, _ = character(addon, frames=8)
     uniform_world(addon)

@@ -8,6 +8,7 @@ Normalization (a contract): under a uniform World of radiance 1, the diffuse
 """
 
 import os
+import stat
 import time
 
 import bpy
@@ -63,12 +64,18 @@ class _Loaded:
                 f"model '{path}' was made for another armature: '{armature.name}' lacks {', '.join(missing[:5])}")
         self.model = model
         sizes, loops = scene_data.polygon_topology(mesh)
+        # The polygons (Blender's vertex normals, computed in C++ each frame)
+        # and the reference neighbours (the frames' tangents).
+        self.mesh = core.visibility.RuntimeMesh(len(mesh.vertices), sizes, loops)
         self.neighbours = core.visibility.reference_neighbours(len(mesh.vertices), sizes, loops)
-        # Arrays reused frame after frame (no per-frame allocation for the mesh
-        # read or the attribute write); the triangles only repair zero-length
-        # normals at run time, so the rest mesh's serve every frame.
+        # The GPU preview's mesh reads (gpu_preview.object_inputs).
         self.buffers = scene_data.MeshBuffers(mesh)
+        # Arrays reused frame after frame: the evaluated mesh's positions
+        # are read into `positions`, the C++ writes the attributes' values
+        # into `rgba` and `ao`, which go to Blender as they are.
+        self.positions = np.empty((model.vertex_count, 3), dtype=np.float32)
         self.rgba = np.ones((model.vertex_count, 4), dtype=np.float32)
+        self.ao = np.empty(model.vertex_count, dtype=np.float32)
 
 
 class paused:
@@ -102,10 +109,14 @@ def loaded_model(obj, check_topology=False):
     if not s.model_path:
         raise VisibilityInputError(f"'{obj.name}' has no visibility model: bake one first")
     path = bpy.path.abspath(s.model_path)
-    if not os.path.isfile(path):
+    try:
+        status = os.stat(path)  # one call a frame: whether the file is there and when it changed
+    except OSError:
+        status = None
+    if status is None or not stat.S_ISREG(status.st_mode):
         raise VisibilityInputError(f"the model file '{path}' of '{obj.name}' is missing — bake again")
     entry = _models.get(obj.name)
-    if entry is None or entry.path != path or entry.mtime != os.path.getmtime(path) or \
+    if entry is None or entry.path != path or entry.mtime != status.st_mtime or \
             entry.counts != _mesh_counts(obj.data):
         _models.pop(obj.name, None)
         entry = _Loaded(obj, path)
@@ -117,27 +128,52 @@ def loaded_model(obj, check_topology=False):
 
 
 def _ensure_attributes(mesh):
+    """The two point attributes, made (or remade with the right type) when
+    needed. Returns them, ready to write."""
     attrs = mesh.attributes
-    shading = attrs.get(SHADING_ATTRIBUTE)
-    if shading is not None and (shading.domain != "POINT" or shading.data_type != "FLOAT_COLOR"):
-        attrs.remove(shading)
-        shading = None
-    if shading is None:
-        shading = attrs.new(SHADING_ATTRIBUTE, "FLOAT_COLOR", "POINT")
-    visibility = attrs.get(VISIBILITY_ATTRIBUTE)
-    if visibility is not None and (visibility.domain != "POINT" or visibility.data_type != "FLOAT"):
-        attrs.remove(visibility)
-        visibility = None
-    if visibility is None:
-        visibility = attrs.new(VISIBILITY_ATTRIBUTE, "FLOAT", "POINT")
-    return SHADING_ATTRIBUTE, VISIBILITY_ATTRIBUTE
+    found = []
+    for name, data_type in ((SHADING_ATTRIBUTE, "FLOAT_COLOR"), (VISIBILITY_ATTRIBUTE, "FLOAT")):
+        attribute = attrs.get(name)
+        if attribute is not None and (attribute.domain != "POINT" or attribute.data_type != data_type):
+            attrs.remove(attribute)
+            attribute = None
+        found.append(attribute)
+        if attribute is None:
+            attrs.new(name, data_type, "POINT")
+    if None in found:  # adding or removing a layer may move the others: look them up afresh
+        return attrs[SHADING_ATTRIBUTE], attrs[VISIBILITY_ATTRIBUTE]
+    return found[0], found[1]
+
+
+def _read_positions(obj, depsgraph, entry):
+    """The evaluated mesh's object-space positions into entry.positions, and
+    the object's world matrix. Blender's normals are not read: reading them
+    makes Blender compute them for the pose, which costs more than the C++
+    computing the same normals (runtime_shading.hpp)."""
+    evaluated = obj.evaluated_get(depsgraph)
+    mesh = evaluated.to_mesh()
+    try:
+        count = len(mesh.vertices)
+        if count != entry.model.vertex_count:
+            # The mesh itself matches the model (loaded_model checked it): a modifier adds or removes vertices.
+            changing = [m.name for m in obj.modifiers if m.show_viewport and m.type != "ARMATURE"]
+            raise VisibilityInputError(
+                f"'{obj.name}' has {count} vertices after its modifiers; the model has "
+                f"{entry.model.vertex_count}: disable {', '.join(changing) or 'the modifiers that add or remove vertices'}, "
+                "or apply them and bake again")
+        scene_data._vertex_positions(mesh, entry.positions)
+    finally:
+        evaluated.to_mesh_clear()
+    return np.array(evaluated.matrix_world, dtype=np.float64)
 
 
 def shade_object(obj, scene, depsgraph=None, check_topology=False):
     """Shades `obj` at the scene's current state and writes its attributes.
-    Returns (rgb, ao, info); info["world_warning"] says what was wrong with
-    the World's pixels, if anything. Raises VisibilityInputError / OSError /
-    ValueError, before anything is written."""
+    Returns (rgb, ao, info): rgb (V, 3) and ao (V,) are views of the object's
+    reused buffers, overwritten by its next shade (copy them to keep them);
+    info["world_warning"] says what was wrong with the World's pixels, if
+    anything. Raises VisibilityInputError / OSError / ValueError, before
+    anything is written."""
     global last_timings
     t0 = time.perf_counter()
     entry = loaded_model(obj, check_topology)
@@ -146,47 +182,43 @@ def shade_object(obj, scene, depsgraph=None, check_topology=False):
     rotations = scene_data.bone_rotations(armature, model.joints)
     depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
     t_read = time.perf_counter()
-    frame = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False, buffers=entry.buffers)
+    world = _read_positions(obj, depsgraph, entry)
     read_mesh = time.perf_counter() - t_read
-    if len(frame.positions) != model.vertex_count:
-        # The mesh itself matches the model (loaded_model checked it): a modifier adds or removes vertices.
-        changing = [m.name for m in obj.modifiers if m.show_viewport and m.type != "ARMATURE"]
-        raise VisibilityInputError(
-            f"'{obj.name}' has {len(frame.positions)} vertices after its modifiers; the model has "
-            f"{model.vertex_count}: disable {', '.join(changing) or 'the modifiers that add or remove vertices'}, "
-            "or apply them and bake again")
     lighting, _, world_warning = scene_data.world_lighting_checked(scene, model.order)
     s = obj.penumbra_visibility
     camera = np.array(scene.camera.matrix_world.translation) if scene.camera else np.zeros(3)
     t1 = time.perf_counter()
-    rgb, ao, info = model.shade(rotations, frame.positions, frame.normals, frame.triangles, entry.neighbours,
-                                lighting, model=s.brdf.lower(), phong_exponent=s.phong_exponent, camera=camera,
-                                transmission=np.array(s.transmission[:]),
-                                threads=scene.penumbra.visibility.threads)
-    # SH truncation and model error can overshoot a little: visibility is a
-    # fraction, radiance is never negative.
-    np.clip(ao, 0.0, 1.0, out=ao)
-    np.maximum(rgb, 0.0, out=rgb)
+    # Normals, frames, lobes and shading in one fused C++ pass, written
+    # straight into the attributes' layout (RGB clamped >= 0, AO to [0, 1]).
+    rgba, ao, info = model.shade_frame(entry.mesh, rotations, entry.positions, world, lighting,
+                                       model=s.brdf.lower(), phong_exponent=s.phong_exponent, camera=camera,
+                                       transmission=np.array(s.transmission[:]),
+                                       threads=scene.penumbra.visibility.threads,
+                                       rgba_out=entry.rgba, visibility_out=entry.ao)
     t2 = time.perf_counter()
     mesh = obj.data
-    shading_name, visibility_name = _ensure_attributes(mesh)
-    rgba = entry.rgba
-    rgba[:, :3] = rgb
-    mesh.attributes[shading_name].data.foreach_set("color", rgba.reshape(-1))
-    mesh.attributes[visibility_name].data.foreach_set("value", ao)
+    shading, visibility = _ensure_attributes(mesh)
+    shading.data.foreach_set("color", rgba.reshape(-1))
+    visibility.data.foreach_set("value", ao)
+    # Blender 4.x and 5.x tag the mesh for the writes above; 3.4 does not, and
+    # without the tag the evaluated mesh (viewport, renders of this
+    # depsgraph) keeps the old values. Either way the depsgraph evaluates
+    # the mesh's modifiers once more after the handler (docs/visibility.md).
     mesh.update()
     t3 = time.perf_counter()
     last_timings = {
         "gather": t1 - t0,
         "read_mesh": read_mesh,
+        "normals": info["seconds_normals"],
         "pose_to_lobes": info["seconds_pose_to_lobes"],
         "frames": info["seconds_frames"],
         "shading": info["seconds_shading"],
+        "shade_call": t2 - t1,
         "write_attributes": t3 - t2,
         "total": t3 - t0,
     }
     info["world_warning"] = world_warning
-    return rgb, ao, info
+    return rgba[:, :3], ao, info
 
 
 def shade_enabled_objects(scene, depsgraph=None):
