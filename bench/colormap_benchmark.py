@@ -304,6 +304,11 @@ def sweep_table(renderer, data, stats):
             out.append(f"| {name} | {size} | {n} | {a['mean']:.5f} ± {a['std']:.5f} | "
                        f"{b['mean']:.5f} ± {b['std']:.5f} | {b['mean'] / a['mean']:.2f} | "
                        f"{a['seconds']:.2f} ({a['cpu']:.2f}) | {b['seconds']:.2f} ({b['cpu']:.2f}) |")
+    loads = [r["load_average"] for r in data["renders"].values() if "load_average" in r]
+    if loads:
+        out += ["", f"Load average (1 min) when each render finished: {min(loads):.1f} to {max(loads):.1f}, "
+                f"median {float(np.median(loads)):.1f}, on 2 cores shared with other jobs: wall seconds are "
+                "inflated by it, CPU seconds much less."]
     references = data.get("references", {})
     if references:
         out += ["", "References: " + ", ".join(
@@ -456,6 +461,8 @@ def bench_render():
         out += [f"![RMSE against samples and CPU time, {TITLE[renderer]}](colormap/rmse-{renderer}.svg)", ""]
         if renderer == "eevee":
             out += eevee_checks(data)
+        else:
+            out += bound_lines(data, stats, seed_statistics(data, "rmse_interior"))
         out += estimate_lines(data)
         interior[renderer] = criteria(renderer, seed_statistics(data, "rmse_interior"), data["config"])
     out += ["### Done when (issue #12)", "", "Every pixel, as the issue measures:", "",
@@ -466,6 +473,28 @@ def bench_render():
     if pictures:
         out += ["", "Pictures (sRGB, the benchmark plane, seed 0): " +
                 ", ".join(f"[{n}](colormap/{n}.png)" for n in pictures)]
+    return out + [""]
+
+
+def bound_lines(data, stats, interior):
+    """The lowest error any texture filter reaches at 1 spp (colormap_render.texture_bound)."""
+    bounds = data.get("texture_bound") or {}
+    rows = [(name, b) for name, b in bounds.items() if 1 in stats[name].get("penumbra", {}) and
+            16 in stats[name].get("plain", {})]
+    if not rows:
+        return []
+    out = ["The lowest RMSE any texture filter can reach at 1 spp, against the criterion's plain ramp at 16 spp. "
+           "At one sample Cycles shades each pixel's centre only: a pixel whose centre ray misses the surface "
+           "stays black whatever the material does, and a pixel whose centre ray hits shows the surface's colour, "
+           "at best the reference's divided by the pixel's coverage (rendered as a white emission at "
+           "1024 spp). That image against the reference is the geometry's own aliasing, which no texture filter "
+           "removes.", "",
+           "| scene | best texture at 1 spp | Penumbra at 1 spp | plain at 16 spp | away from silhouettes: best | "
+           "Penumbra 1 spp | plain 16 spp |", "|---|---|---|---|---|---|---|"]
+    for name, b in rows:
+        out.append(f"| {name} | {b['rmse']:.5f} | {stats[name]['penumbra'][1]['mean']:.5f} | "
+                   f"{stats[name]['plain'][16]['mean']:.5f} | {b['rmse_interior']:.5f} | "
+                   f"{interior[name]['penumbra'][1]['mean']:.5f} | {interior[name]['plain'][16]['mean']:.5f} |")
     return out + [""]
 
 

@@ -345,6 +345,13 @@ class BakePlan:
         noise_filter = tree.nodes.new("ShaderNodeGroup")
         noise_filter.node_tree = node_groups.noise_filter_group(octave_image, table, self.noise_model,
                                                                 self.filter_stddev, self.taps)
+        eevee_taps = node_groups.tap_count(self.noise_model, "BLENDER_EEVEE")
+        if eevee_taps < self.taps:
+            # Too costly for EEVEE at this many taps: keep a smaller group
+            # for it, which the render_init handler swaps in.
+            noise_filter[sample_count.GROUP_FOR_CYCLES] = noise_filter.node_tree
+            noise_filter[sample_count.GROUP_FOR_EEVEE] = node_groups.noise_filter_group(
+                octave_image, table, self.noise_model, self.filter_stddev, eevee_taps)
         sample_count.drive_samples(noise_filter, self.scene)
         noise_filter.name = noise_filter.label = "Penumbra Noise Filter"
         noise_filter.location = (group_node.location.x - 220, group_node.location.y + 40)
