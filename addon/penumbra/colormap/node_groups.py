@@ -50,9 +50,11 @@ MIXTURE_COMPONENTS = 4
 # Noise evaluations per shading point the Noise Filter may spend in EEVEE:
 # llvmpipe (and GPU drivers) compile the whole material as one shader, and
 # its memory grows faster than linearly with the Noise nodes in it (Blender
-# 3.4, llvmpipe, 48×27, 1 sample: 16 evaluations 1.1 GiB, 48 3.3 GiB,
-# 80 6.8 GiB; Detail 8 with Distortion at 16 taps, 192, went past 24 GiB).
-EEVEE_NOISE_BUDGET = 80
+# 3.4, llvmpipe, 48×27, 1 sample, peak memory and first render: 16 Noise
+# evaluations 1.1 GiB, 6 s; 48 3.3 GiB, 42 s; 80 6.8 GiB, 88 s; Detail 8
+# with Distortion at 16 taps, 192, went past 24 GiB). Detail 4 gets 8 taps
+# (40: 2.5 GiB, 25 s), Detail 8 with Distortion 4 (48: 3.3 GiB).
+EEVEE_NOISE_BUDGET = 48
 TAP_COUNTS = (16, 8, 4)
 # The kernel's standard deviation at N samples is κ·N^(−KERNEL_SHARE_EXPONENT).
 KERNEL_SHARE_EXPONENT = 0.375
