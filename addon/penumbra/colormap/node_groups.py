@@ -56,8 +56,11 @@ MIXTURE_COMPONENTS = 4
 # (40: 2.5 GiB, 25 s), Detail 8 with Distortion 4 (48: 3.3 GiB).
 EEVEE_NOISE_BUDGET = 48
 TAP_COUNTS = (16, 8, 4)
-# The kernel's standard deviation at N samples is κ·N^(−KERNEL_SHARE_EXPONENT).
-KERNEL_SHARE_EXPONENT = 0.375
+# The kernel's standard deviation at N samples is κ·N^(−KERNEL_SHARE_EXPONENT):
+# each sample's share of the footprint, τ² = κ²/N. A slower hand-over
+# (N^(−3/8)) was 8–12 % better at 4 and 16 spp but kept a blur at silhouettes
+# that made the torus worse than the plain ramp at 256 spp (docs/colormap.md).
+KERNEL_SHARE_EXPONENT = 0.5
 
 
 def major_taps(count):
@@ -469,8 +472,8 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_CO
     mixture of Gaussians".
 
     Each sample filters what the renderer will not: with N = Samples, a
-    Gaussian kernel of standard deviation τ = κ·N^(−3/8) (κ the pixel
-    filter's) centred at the sample. At one sample (at the pixel's centre in Cycles and
+    Gaussian kernel of standard deviation τ = κ/√N (κ the pixel filter's)
+    centred at the sample. At one sample (at the pixel's centre in Cycles and
     EEVEE) it is the pixel's estimate; as N grows it shrinks onto the sample
     and the result tends to the plain ramp.
 
@@ -537,9 +540,9 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_CO
 
 
 def _kernel_share(b, samples):
-    """τ/κ = N^(−3/8), N = Samples clamped to ≥ 1: the kernel's share of the
-    pixel filter's standard deviation (τ² = κ² N^(−3/4); docs/colormap.md,
-    "Sample-count-aware filter", for why not 1/√N)."""
+    """τ/κ = N^(−KERNEL_SHARE_EXPONENT) = 1/√N, N = Samples clamped to ≥ 1:
+    the kernel's share of the pixel filter's standard deviation
+    (docs/colormap.md, "Sample-count-aware filter")."""
     return b.math("POWER", b.math("MAXIMUM", samples, 1.0), -KERNEL_SHARE_EXPONENT)
 
 

@@ -17,9 +17,9 @@ but one of variance below E[m²] = 0.0085 κ² widens the pixel filter. The
 variance-keeping rule, centre x − (1 − β) m(x) with τ² = (1 − β²) E[m²], is
 therefore almost the plain ramp; pulling the kernel towards the centre of the
 pixel the sample lies in (the earlier rule) only adds (1 − β)² Var(x − snap)
-to the blur. The filter keeps the kernel at the sample with τ = κ N^(−3/8):
-at one sample (at the centre) the pixel's estimate, a blur that shrinks as
-N^(−3/4), traded against the samples' noise."""
+to the blur. The filter keeps the kernel at the sample with τ = κ/√N: at
+one sample (at the centre) the pixel's estimate, a blur that shrinks as 1/N,
+traded against the samples' noise."""
 
 from statistics import NormalDist
 
@@ -37,7 +37,7 @@ FREQUENCY = 2 * np.pi * np.array([1 / 8, 1 / 4, 1 / 2, 1.0, 2.0, 5.0])
 _ANGLES = np.array([0.3, 1.9, 0.9, 2.6, 1.4, 0.1])
 OMEGA = FREQUENCY[:, None] * np.stack([np.cos(_ANGLES), np.sin(_ANGLES)], axis=1)   # (octaves, 2)
 AMPLITUDE = 0.25 * 0.6 ** np.arange(len(FREQUENCY))
-SHARE_EXPONENT = 0.375                        # node_groups.KERNEL_SHARE_EXPONENT
+SHARE_EXPONENT = 0.5                          # node_groups.KERNEL_SHARE_EXPONENT
 
 
 def blackman_harris(u):
