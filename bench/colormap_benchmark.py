@@ -88,6 +88,7 @@ def bench_build():
     out = ["## Building a 256 × 256 lookup", "",
            "| colour map | knots | exact (s) | sampled sum, 2001 taps (s) | speed-up | max |exact − sampled| | ramp sampling error |",
            "|---|---|---|---|---|---|---|"]
+    load_before = os.getloadavg()[0]
     for name, (p, c, interp, sampling_error) in maps().items():
         t_exact, lut = timed(lambda: pen.colormap.lut_knots(p, c, interp, 256, 256, 0.25, -0.25, 1.25))
         if interp == pen.colormap.MapInterpolation.LINEAR:
@@ -101,7 +102,9 @@ def bench_build():
     out += ["", f"Memory: the table itself is {lut.nbytes / 1024:.0f} KiB as float32 RGB "
             f"({lut.nbytes * 2 // 4 // 1024} KiB as half, 192 KiB as 8-bit RGB like the paper); peak RSS grew by "
             f"{max(0, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss_before)} KiB building it "
-            "(no buffers beyond the output). The exact build is threaded over rows (2 threads here).", ""]
+            "(no buffers beyond the output). The exact build is threaded over rows (2 threads here). "
+            f"Load average (1 min) before / after the table: {load_before:.1f} / {os.getloadavg()[0]:.1f} on the "
+            "shared 2 cores (the speed-ups compare runs made moments apart).", ""]
     return out
 
 
@@ -304,6 +307,11 @@ def sweep_table(renderer, data, stats):
             out.append(f"| {name} | {size} | {n} | {a['mean']:.5f} ± {a['std']:.5f} | "
                        f"{b['mean']:.5f} ± {b['std']:.5f} | {b['mean'] / a['mean']:.2f} | "
                        f"{a['seconds']:.2f} ({a['cpu']:.2f}) | {b['seconds']:.2f} ({b['cpu']:.2f}) |")
+    loads = [r["load_average"] for r in data["renders"].values() if "load_average" in r]
+    if loads:
+        out += ["", f"Load average (1 min) when each render finished: {min(loads):.1f} to {max(loads):.1f}, "
+                f"median {float(np.median(loads)):.1f}, on 2 cores shared with other jobs: wall seconds are "
+                "inflated by it, CPU seconds much less."]
     references = data.get("references", {})
     if references:
         out += ["", "References: " + ", ".join(
@@ -456,6 +464,8 @@ def bench_render():
         out += [f"![RMSE against samples and CPU time, {TITLE[renderer]}](colormap/rmse-{renderer}.svg)", ""]
         if renderer == "eevee":
             out += eevee_checks(data)
+        else:
+            out += bound_lines(data, stats, seed_statistics(data, "rmse_interior"))
         out += estimate_lines(data)
         interior[renderer] = criteria(renderer, seed_statistics(data, "rmse_interior"), data["config"])
     out += ["### Done when (issue #12)", "", "Every pixel, as the issue measures:", "",
@@ -466,6 +476,28 @@ def bench_render():
     if pictures:
         out += ["", "Pictures (sRGB, the benchmark plane, seed 0): " +
                 ", ".join(f"[{n}](colormap/{n}.png)" for n in pictures)]
+    return out + [""]
+
+
+def bound_lines(data, stats, interior):
+    """The lowest error any texture filter reaches at 1 spp (colormap_render.texture_bound)."""
+    bounds = data.get("texture_bound") or {}
+    rows = [(name, b) for name, b in bounds.items() if 1 in stats[name].get("penumbra", {}) and
+            16 in stats[name].get("plain", {})]
+    if not rows:
+        return []
+    out = ["The lowest RMSE any texture filter can reach at 1 spp, against the criterion's plain ramp at 16 spp. "
+           "At one sample Cycles shades each pixel's centre only: a pixel whose centre ray misses the surface "
+           "stays black whatever the material does, and a pixel whose centre ray hits shows the surface's colour, "
+           "at best the reference's divided by the pixel's coverage (rendered as a white emission at "
+           "1024 spp). That image against the reference is the geometry's own aliasing, which no texture filter "
+           "removes.", "",
+           "| scene | best texture at 1 spp | Penumbra at 1 spp | plain at 16 spp | away from silhouettes: best | "
+           "Penumbra 1 spp | plain 16 spp |", "|---|---|---|---|---|---|---|"]
+    for name, b in rows:
+        out.append(f"| {name} | {b['rmse']:.5f} | {stats[name]['penumbra'][1]['mean']:.5f} | "
+                   f"{stats[name]['plain'][16]['mean']:.5f} | {b['rmse_interior']:.5f} | "
+                   f"{interior[name]['penumbra'][1]['mean']:.5f} | {interior[name]['plain'][16]['mean']:.5f} |")
     return out + [""]
 
 
@@ -513,10 +545,13 @@ def bench_footprint():
             band = "θ < 85°" if r["view_angle"] < 85 else ("85° ≤ θ < 89°" if r["view_angle"] < 89 else "θ ≥ 89°")
             worst[band] = max(worst.get(band, 0.0), max(abs(x - 1.0) for x in ratios))
     out += ["", "Largest relative error: " + ", ".join(f"{k}: {100 * v:.1f} %" for k, v in sorted(worst.items())) +
-            ". The node is the first-order (Jacobian) footprint at the pixel centre; it is exact for a plane up to the "
-            "projection's curvature across the pixel, which only matters for pixels that reach the horizon (there the "
-            "far edge of the pixel projects much further than the centre's derivative predicts, and the node "
-            "underestimates the major axis).", ""]
+            ". For perspective cameras the node takes the secant across the pixel (its edge midpoints' rays meeting the "
+            "tangent plane, what the true major/minor above measure), not the derivative at the centre, which fell "
+            "short at the horizon; a ray beyond the horizon is taken to meet the plane at `HORIZON_REACH` times the "
+            "sample's distance, which bounds the footprint there. Footprint is √ of the parallelogram spanned by "
+            "the secants: below the area of the curved quadrilateral a pixel touching the horizon covers (the "
+            "filter reads Minor and Major, not Footprint). Orthographic cameras keep the derivative (the "
+            "projection is affine).", ""]
     return out
 
 

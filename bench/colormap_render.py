@@ -205,13 +205,15 @@ class Context:
         self.build_seconds = seconds
 
 
-def build(runner, name, size, cfg, out):
-    """New scene with the runner's engine, the variant `name`, baked."""
+def build(runner, name, size, cfg, out, bake=True):
+    """New scene with the runner's engine, the variant `name`, baked (or not)."""
     started = time.perf_counter()
     scene = new_scene(size, cfg["threads"])
     runner.configure(scene, cfg)
     builder, kwargs, _, _ = SCENES[name]
     built = getattr(colormap_scene, builder)(**kwargs)
+    if not bake:
+        return Context(name, scene, built, time.perf_counter() - started)
     scene.penumbra.colormap.output_folder = os.path.join(out, runner.name, name, "lookup")
     result = bpy.ops.penumbra.bake_colormap_lut()
     if result != {"FINISHED"}:
@@ -361,6 +363,7 @@ def sweep_scene(runner, name, cfg, out, results, addon):
                 "scene": name, "method": method, "spp": spp, "seed": seed, "rmse": error, "rmse_interior": interior,
                 "interior_fraction": float(interiors[ref_id].mean()), "seconds": seconds,
                 "cpu_seconds": cpu, "size": list(size), "signature": sig[method], "warm_up_seconds": warm_up,
+                "load_average": os.getloadavg()[0],
                 "driven": driven_values(ctx.material)})
             log(f"{name:20s} {method:8s} {spp:4d} spp seed {seed}: RMSE {error:.5f}  {seconds:.2f} s")
 
@@ -535,7 +538,52 @@ class Cycles:
         return {"device": "CPU", "denoising": False, "adaptive_sampling": False}
 
     def extra(self, results, cfg, out):
-        pass
+        results.data["texture_bound"] = texture_bound(self, results, cfg, out)
+
+
+COVERAGE_SPP = 1024
+
+
+def texture_bound(runner, results, cfg, out):
+    """Per scene: the lowest RMSE any texture filter can reach at 1 spp. At
+    one sample Cycles shades the pixel's centre only: a pixel whose centre
+    ray misses the surface is black whatever the material does, and one
+    whose centre hits the surface shows the surface's colour, at best the
+    reference's over the pixel's coverage (the surface's filter-weighted
+    share of the pixel, rendered as a white emission at COVERAGE_SPP spp).
+    That image against the reference: the geometry's own aliasing."""
+    bounds = {}
+    for name in cfg["scenes"]:
+        folder = os.path.join(out, runner.name, name)
+        hit_path = os.path.join(folder, "penumbra_1spp_seed0.exr")
+        ref_path = os.path.join(folder, "reference.exr")
+        if 1 not in cfg["spp"] or not (os.path.isfile(hit_path) and os.path.isfile(ref_path)):
+            continue
+        size = scene_size(name, cfg)
+        signature = _hash(HARNESS_VERSION, bpy.app.version_string, SCENES[name][:2], size, COVERAGE_SPP,
+                          _file_hash([colormap_scene.__file__]))
+        path = os.path.join(folder, "coverage.exr")
+        if results.get("references", f"{name}|coverage", signature) is None or not os.path.isfile(path):
+            ctx = build(runner, name, size, cfg, out, bake=False)
+            tree = ctx.material.node_tree
+            for link in list(ctx.emission.inputs["Color"].links):
+                tree.links.remove(link)
+            ctx.emission.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+            ctx.scene.cycles.seed = runner.REFERENCE_SEED
+            runner.set_samples(ctx.scene, COVERAGE_SPP)
+            update(ctx.scene)
+            seconds, cpu = render(ctx.scene, path)
+            results.put("references", f"{name}|coverage", {"signature": signature, "seconds": seconds,
+                                                           "cpu_seconds": cpu, "path": path})
+        reference, coverage = read(ref_path), read(path)[..., :1]
+        hit = read(hit_path).sum(axis=2, keepdims=True) > 0
+        best = np.where(hit, reference / np.maximum(coverage, 1e-6), 0.0)
+        interior = interior_mask(reference)
+        bounds[name] = {"rmse": rmse(best, reference), "rmse_interior": rmse(best, reference, interior),
+                        "missed_covered_pixels": int(((~hit[..., 0]) & (reference.sum(axis=2) > 1e-6)).sum())}
+        log(f"{name}: best texture at 1 spp: RMSE {bounds[name]['rmse']:.5f} "
+            f"(away from silhouettes {bounds[name]['rmse_interior']:.5f})")
+    return bounds
 
 
 if __name__ == "__main__":

@@ -9,8 +9,10 @@
   footprint on the surface from the Jacobian of the camera projection, and
   the offset to the pixel's centre (see docs/colormap.md, "Footprint").
 - "Penumbra Noise Filter" (per noise setting): Vector, Scale, Units per
-  World, Minor, Major, Axis U, Axis V, Centre Offset -> Mean, Sigma, the
-  octave-wise filter of the noise with 16 taps over the footprint.
+  World, Minor, Major, Axis U, Axis V, Samples, W -> Mean, Sigma, Offsets,
+  Variances, the octave-wise filter of the noise with 16 taps (8 or 4 in
+  EEVEE for costly noises) over the sample's share of the footprint, as one
+  Gaussian (Mean, Sigma) and as a mixture of four (Offsets, Variances).
 - "Penumbra Height Filtered Ramp" / "Penumbra Slope Filtered Ramp": paper
   Sec. 5.1 / 5.2, reading the microsurface statistics image.
 Groups are built with interface.add_socket, so the same code makes them in
@@ -18,6 +20,7 @@ Blender 3.4 (inputs/outputs) and 4.x (interface)."""
 
 import math
 import os
+import statistics
 import tempfile
 
 import bpy
@@ -38,14 +41,56 @@ MICROSURFACE_TABLE_SIZE = 256
 HORIZON_REACH = 20.0
 # Bumped whenever the Noise Filter's nodes change, so a re-bake in a .blend
 # saved by an older version builds the group anew (2: Closest texel fetches;
-# 3: taps outermost, within Cycles' SVM stack).
-NOISE_FILTER_VERSION = 3
-# Tap positions along the footprint's major axis, in filter standard
-# deviations: the Gaussian's quantiles at (k + 1/2)/8 scaled to unit variance
-# (equal weights); two taps (±1) along the minor axis: 16 taps in all.
-_Q = (-1.5341, -0.8871, -0.4888, -0.1573, 0.1573, 0.4888, 0.8871, 1.5341)
-MAJOR_TAPS = tuple(x / math.sqrt(sum(v * v for v in _Q) / len(_Q)) for x in _Q)
+# 3: taps outermost, within Cycles' SVM stack; 4: kernels at the sample, no
+# Centre Offset input, the four-Gaussian mixture's Offsets and Variances).
+NOISE_FILTER_VERSION = 4
+# Components of the Gaussian mixture the Noise Filter hands the filtered ramp
+# (docs/colormap.md, "A mixture of Gaussians"): the taps in four equal groups.
+MIXTURE_COMPONENTS = 4
+# Noise evaluations per shading point the Noise Filter may spend in EEVEE:
+# llvmpipe (and GPU drivers) compile the whole material as one shader, and
+# its memory grows faster than linearly with the Noise nodes in it (Blender
+# 3.4, llvmpipe, 48×27, 1 sample, peak memory and first render: 16 Noise
+# evaluations 1.1 GiB, 6 s; 48 3.3 GiB, 42 s; 80 6.8 GiB, 88 s; Detail 8
+# with Distortion at 16 taps, 192, went past 24 GiB). Detail 4 gets 8 taps
+# (40: 2.5 GiB, 25 s), Detail 8 with Distortion 4 (48: 3.3 GiB).
+EEVEE_NOISE_BUDGET = 48
+TAP_COUNTS = (16, 8, 4)
+# The kernel's standard deviation at N samples is κ·N^(−KERNEL_SHARE_EXPONENT):
+# each sample's share of the footprint, τ² = κ²/N. A slower hand-over
+# (N^(−3/8)) was 8–12 % better at 4 and 16 spp but kept a blur at silhouettes
+# that made the torus worse than the plain ramp at 256 spp (docs/colormap.md).
+KERNEL_SHARE_EXPONENT = 0.5
+
+
+def major_taps(count):
+    """Tap positions along the footprint's major axis, in kernel standard
+    deviations: the Gaussian's quantiles at (k + 1/2)/count scaled to unit
+    variance (equal weights). With two taps (±1) along the minor axis they
+    make 2·count taps."""
+    quantiles = [statistics.NormalDist().inv_cdf((k + 0.5) / count) for k in range(count)]
+    rms = math.sqrt(sum(q * q for q in quantiles) / count)
+    return tuple(q / rms for q in quantiles)
+
+
+MAJOR_TAPS = major_taps(8)
 TAP_COUNT = 2 * len(MAJOR_TAPS)
+
+
+def noise_evaluations_per_tap(model):
+    """Noise Textures one tap evaluates: one per octave, plus one per axis of
+    the distortion's offset."""
+    return len(model.coefficients) + (model.axes if model.distortion != 0.0 else 0)
+
+
+def tap_count(model, engine):
+    """Taps of the Noise Filter for a render engine: 16 in Cycles; in EEVEE
+    the most of TAP_COUNTS within EEVEE_NOISE_BUDGET Noise evaluations (at
+    least 4)."""
+    if engine not in ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT"):
+        return TAP_COUNTS[0]
+    per_tap = noise_evaluations_per_tap(model)
+    return next((n for n in TAP_COUNTS if n * per_tap <= EEVEE_NOISE_BUDGET), TAP_COUNTS[-1])
 
 
 class _Builder:
@@ -213,17 +258,53 @@ def _lookup_uv(b, mean, sigma, spec):
     return u, b.texel(t, height)
 
 
-def filtered_ramp_group(image, spec, name=FILTERED_RAMP):
+def filtered_ramp_group(image, spec, name=FILTERED_RAMP, mixture=False):
     """Mean, Sigma -> Color, Alpha from `image` (a lookup with `spec`: width,
-    height, sigma_max, mean_min, mean_max, sigma_spacing)."""
-    group, gin, gout = _new_group(name, [("Mean", "NodeSocketFloat", 0.5), ("Sigma", "NodeSocketFloat", 0.0)],
-                                  [("Color", "NodeSocketColor"), ("Alpha", "NodeSocketFloat")])
+    height, sigma_max, mean_min, mean_max, sigma_spacing).
+
+    mixture=True adds the inputs Offsets and Variances (vectors, default 0):
+    the colour is then the average of the lookup over MIXTURE_COMPONENTS
+    Gaussians N(Mean + δ_k, Sigma² + ε_k), (δ_k, ε_k) for k = 1..3 the
+    vectors' components and, the four having the mixture's mean Mean and
+    variance Sigma², δ_4 = −(δ_1 + δ_2 + δ_3), ε_4 = −(ε_1 + ε_2 + ε_3) −
+    Σ_k δ_k². Left at zero, that is the one Gaussian N(Mean, Sigma²)."""
+    inputs = [("Mean", "NodeSocketFloat", 0.5), ("Sigma", "NodeSocketFloat", 0.0)]
+    if mixture:
+        inputs += [("Offsets", "NodeSocketVector", (0.0, 0.0, 0.0)), ("Variances", "NodeSocketVector", (0.0, 0.0, 0.0))]
+    group, gin, gout = _new_group(name, inputs, [("Color", "NodeSocketColor"), ("Alpha", "NodeSocketFloat")])
     b = _Builder(group)
-    color, alpha = b.image(image, *_lookup_uv(b, gin.outputs["Mean"], gin.outputs["Sigma"], spec))
+    mean, sigma = gin.outputs["Mean"], gin.outputs["Sigma"]
+    if not mixture:
+        color, alpha = b.image(image, *_lookup_uv(b, mean, sigma, spec))
+    else:
+        color, alpha = _mixture_lookup(b, image, spec, mean, sigma, gin.outputs["Offsets"], gin.outputs["Variances"])
     b.links.new(color, gout.inputs["Color"])
     b.links.new(alpha, gout.inputs["Alpha"])
     group["penumbra_lookup"] = dict(spec, image=image.name)
     return group
+
+
+def _mixture_lookup(b, image, spec, mean, sigma, offsets, variances):
+    """The average of the lookup over the mixture's four components (see
+    filtered_ramp_group), each fetched after the previous one (_zero_after)."""
+    d = b.separate(offsets)
+    e = b.separate(variances)
+    d4 = b.math("MULTIPLY", b.math("ADD", b.math("ADD", d[0], d[1]), d[2]), -1.0)
+    squares = b.math("MULTIPLY_ADD", d4, d4, b.math("MULTIPLY_ADD", d[2], d[2], b.math(
+        "MULTIPLY_ADD", d[1], d[1], b.math("MULTIPLY", d[0], d[0]))))
+    e4 = b.math("SUBTRACT", b.math("MULTIPLY", b.math("ADD", b.math("ADD", e[0], e[1]), e[2]), -1.0), squares)
+    variance = b.math("MULTIPLY", sigma, sigma)
+    color, alpha = None, None
+    for offset, extra in zip(d + (d4,), e + (e4,)):
+        component_mean = b.math("ADD", mean, offset)
+        if alpha is not None:
+            component_mean = b.math("ADD", component_mean, _zero_after(b, alpha))
+        component_sigma = b.math("SQRT", b.math("MAXIMUM", b.math("ADD", variance, extra), 0.0))
+        c, a = b.image(image, *_lookup_uv(b, component_mean, component_sigma, spec))
+        color = c if color is None else b.vmath("ADD", color, c)
+        alpha = a if alpha is None else b.math("ADD", alpha, a)
+    share = 1.0 / MIXTURE_COMPONENTS
+    return b.vscale(color, share), b.math("MULTIPLY", alpha, share)
 
 
 def footprint_group():
@@ -381,40 +462,44 @@ def _centre_offset(b, gin, gout, geometry, forward, right, up, ju, jv):
     b.links.new(b.vscale(offset, b.math("MULTIPLY", in_front, near)), gout.inputs["Centre Offset"])
 
 
-def noise_filter_group(octave_image, table, model, filter_stddev_px):
-    """Vector, Scale, Units per World, Minor, Major, Axis U, Axis V, Centre
-    Offset, Samples, W -> Mean, Sigma: the octave-wise filter of the noise
+def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_COUNT):
+    """Vector, Scale, Units per World, Minor, Major, Axis U, Axis V, Samples,
+    W -> Mean, Sigma, Offsets, Variances: the octave-wise filter of the noise
     `model` (noise_model.NoiseModel: offset + Σ c_i (Fac_i − 0.5), Fac_i a
     normalized Noise Texture at Detail 0 and Scale·lacunarity^i on the
     distorted position; normalized fBm: offset 0.5, c_i = w_i). See
-    docs/colormap.md, "Octave filter" and "Sample-count-aware filter".
+    docs/colormap.md, "Octave filter", "Sample-count-aware filter" and "A
+    mixture of Gaussians".
 
-    Each sample filters its share of the pixel filter: with N = Samples,
-    a Gaussian of standard deviation τ = κ/√N (κ the pixel filter's) centred
-    at c + β(x − c), β = √(1 − 1/N), c the pixel's centre and x the sample
-    (P + (1 − β)·Centre Offset). Averaged over the sample positions these
-    kernels have the pixel filter's variance β²κ² + τ² = κ² at every N, so the
-    expected pixel is filtered as the renderer would filter it; at N = 1 every
-    sample of a pixel gets the pixel-centred estimate, and as N grows the
-    kernel shrinks onto the sample and the result tends to the plain ramp.
+    Each sample filters what the renderer will not: with N = Samples, a
+    Gaussian kernel of standard deviation τ = κ/√N (κ the pixel filter's)
+    centred at the sample. At one sample (at the pixel's centre in Cycles and
+    EEVEE) it is the pixel's estimate; as N grows it shrinks onto the sample
+    and the result tends to the plain ramp.
 
-    The 16 taps sit at P + (1 − β)·Centre Offset + τ(n·m + t·M): n = ±1
-    along the footprint ellipse's minor axis m, t = MAJOR_TAPS along its
-    major axis M (offsets taken to the noise's coordinates by the object's
-    inverse transform and Units per World), then moved by the noise's
-    Distortion; their average A_i estimates octave i's mean over the kernel.
-    Over a kernel of standard deviations s·(1, e) (s = τ·Minor·Scale·Units
-    per World, e = Major/Minor) octave i keeps the fraction
-    q_i = q(s·lacunarity^i, e) of its variance inside (measured table); the
-    taps estimate the mean with an error of about e_i = q_i²/16 of the
-    octave's variance. Mean = offset + Σ c_i g_i (A_i − 0.5),
-    g_i = (1 − q_i)/(1 − q_i + e_i) (least-squares shrinkage). Sigma² = the
-    taps' spread of Σ c_i g_i (Fac_i − 0.5) + V₀ Σ c_i² (max(q_i − g_i² q_i
-    (1 − q_i/16), 0) + (1 − q_i) e_i/(1 − q_i + e_i)): the variance the
-    spread misses on average, plus the remaining uncertainty of the mean."""
+    `taps` (16, 8 or 4) taps sit at P + τ(n·m + t·M): n = ±1 along the
+    footprint ellipse's minor axis m, t = major_taps(taps/2) along its major
+    axis M (offsets taken to the noise's coordinates by the object's inverse
+    transform and Units per World), then moved by the noise's Distortion;
+    their average A_i estimates octave i's mean over the kernel. Over a
+    kernel of standard deviations s·(1, e) (s = τ·Minor·Scale·Units per
+    World, e = Major/Minor) octave i keeps the fraction q_i = q(s·lacunarity^i,
+    e) of its variance inside (measured table); the taps estimate the mean
+    with an error of about e_i = q_i²/taps of the octave's variance.
+    s_t = Σ c_i g_i (Fac_i(tap) − 0.5), g_i = (1 − q_i)/(1 − q_i + e_i)
+    (least-squares shrinkage); Mean = offset + the taps' average of s_t.
+    Sigma² = the taps' spread of s_t + V_u, V_u = V₀ Σ c_i² (max(q_i − g_i²
+    q_i (1 − q_i/taps), 0) + (1 − q_i) e_i/(1 − q_i + e_i)): the variance the
+    spread misses on average, plus the remaining uncertainty of the mean.
+    Offsets and Variances describe the taps in four equal groups k (taps
+    next to each other along M, both sides): δ_k = the group's mean of s_t −
+    their average, ε_k = the group's spread − all the taps' spread, for
+    k = 1..3 (filtered_ramp_group(mixture=True) reads them)."""
     coefficients, offset, lacunarity = model.coefficients, model.offset, model.lacunarity
+    if taps not in TAP_COUNTS:
+        raise ValueError(f"taps must be one of {TAP_COUNTS}, not {taps}")
     key = (f"{model.dimensions} " + "/".join(f"{c:.6g}" for c in coefficients) +
-           f" o{offset:g} l{lacunarity:g} d{model.distortion:g} w{model.w} k{filter_stddev_px:.4g}")
+           f" o{offset:g} l{lacunarity:g} d{model.distortion:g} w{model.w} k{filter_stddev_px:.4g} t{taps}")
     name = f"{NOISE_FILTER} ({key} spp)"
     group = bpy.data.node_groups.get(name)
     if group is not None and group.get("penumbra_version") == NOISE_FILTER_VERSION:
@@ -427,57 +512,78 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px):
                                          ("Minor", "NodeSocketFloat", 0.0), ("Major", "NodeSocketFloat", 0.0),
                                          ("Axis U", "NodeSocketVector", (0.0, 0.0, 0.0)),
                                          ("Axis V", "NodeSocketVector", (0.0, 0.0, 0.0)),
-                                         ("Centre Offset", "NodeSocketVector", (0.0, 0.0, 0.0)),
                                          ("Samples", "NodeSocketFloat", 1.0),
                                          ("W", "NodeSocketFloat", 0.0)],
-                                  [("Mean", "NodeSocketFloat"), ("Sigma", "NodeSocketFloat")])
+                                  [("Mean", "NodeSocketFloat"), ("Sigma", "NodeSocketFloat"),
+                                   ("Offsets", "NodeSocketVector"), ("Variances", "NodeSocketVector")])
     group["penumbra_octave_coefficients"] = list(coefficients)
     group["penumbra_octave_offset"] = offset
+    group["penumbra_taps"] = taps
     b = _Builder(group)
-    share, centre_weight = _sample_share(b, gin.outputs["Samples"])
+    share = _kernel_share(b, gin.outputs["Samples"])
     log2_s, v = _footprint_table_coordinates(b, gin, table, filter_stddev_px, share)
     variance, weights = 0.0, []       # weights: c_i g_i, the shrunk octave's weight in the mean
     for i, c in enumerate(coefficients):
         q = _octave_fraction(b, octave_image, table, log2_s, v, i * math.log2(lacunarity),
                              weights[-1] if weights else None)
-        g, term = _octave_shrinkage(b, q, TAP_COUNT)
+        g, term = _octave_shrinkage(b, q, taps)
         weights.append(b.math("MULTIPLY", g, c))
         variance = b.math("MULTIPLY_ADD", term, table["total_var"] * c * c, variance)
-    # Taps outermost, octaves inside, each tap after the previous one
-    # (_zero_after): only the running sums of s_t = Σ_i c_i g_i (Fac_i(tap) −
-    # 0.5) and s_t² stay live; their mean is the filtered mean's noise part
-    # and their spread the taps'.
-    tap_sum, tap_square, s_t = 0.0, 0.0, 0.0
-    offsets, tap_at = _pixel_taps(b, gin, filter_stddev_px, share, centre_weight)
-    for side, t in offsets:
-        tap = noise_model.distorted_vector(b, tap_at(side, t, s_t), gin.outputs["Scale"], model, gin.outputs["W"])
-        s_t = 0.0
-        for i, weight in enumerate(weights):
-            scale = b.math("MULTIPLY", gin.outputs["Scale"], lacunarity ** i)
-            fac = noise_model.octave_fac(b, tap, scale, model)
-            s_t = b.math("MULTIPLY_ADD", b.math("SUBTRACT", fac, 0.5), weight, s_t)
-        tap_sum = b.math("ADD", tap_sum, s_t)
-        tap_square = b.math("MULTIPLY_ADD", s_t, s_t, tap_square)
-    tap_mean = b.math("MULTIPLY", tap_sum, 1.0 / TAP_COUNT)
-    mean = b.math("ADD", tap_mean, offset)
-    # The taps' spread: the local within-pixel variance of the octaves the
-    # mean keeps (exact for a field linear across the pixel).
-    spread = b.math("SUBTRACT", b.math("MULTIPLY", tap_square, 1.0 / TAP_COUNT), b.math("MULTIPLY", tap_mean, tap_mean))
-    variance = b.math("ADD", variance, b.math("MAXIMUM", spread, 0.0))
-    b.connect(mean, gout.inputs["Mean"])
+    mean, spread, offsets, variances = _tap_groups(b, gin, model, weights, filter_stddev_px, share, taps)
+    b.connect(b.math("ADD", mean, offset), gout.inputs["Mean"])
+    variance = b.math("ADD", variance, spread)
     b.links.new(b.math("SQRT", b.math("MAXIMUM", variance, 0.0)), gout.inputs["Sigma"])
+    b.links.new(offsets, gout.inputs["Offsets"])
+    b.links.new(variances, gout.inputs["Variances"])
     group["penumbra_version"] = NOISE_FILTER_VERSION
     return group
 
 
-def _sample_share(b, samples):
-    """1/√N (the kernel's share of the pixel filter's standard deviation) and
-    1 − β = 1 − √(1 − 1/N) (how far the kernel sits towards the pixel's
-    centre), N = Samples clamped to ≥ 1."""
-    n = b.math("MAXIMUM", samples, 1.0)
-    inverse = b.math("DIVIDE", 1.0, n)
-    centre_weight = b.math("SUBTRACT", 1.0, b.math("SQRT", b.math("SUBTRACT", 1.0, inverse)))
-    return b.math("SQRT", inverse), centre_weight
+def _kernel_share(b, samples):
+    """τ/κ = N^(−KERNEL_SHARE_EXPONENT) = 1/√N, N = Samples clamped to ≥ 1:
+    the kernel's share of the pixel filter's standard deviation
+    (docs/colormap.md, "Sample-count-aware filter")."""
+    return b.math("POWER", b.math("MAXIMUM", samples, 1.0), -KERNEL_SHARE_EXPONENT)
+
+
+def _tap_groups(b, gin, model, weights, filter_stddev_px, share, taps):
+    """The taps' s_t = Σ_i c_i g_i (Fac_i(tap) − 0.5), summed in four equal
+    groups: neighbouring positions along the major axis, both sides of the
+    minor axis (16 taps: 2 positions × 2 sides; 8: 1 × 2; 4: one tap each).
+    Returns the taps' mean of s_t, their
+    spread, and the mixture's (δ_1..3) and (ε_1..3) as vectors. Taps
+    outermost, octaves inside, each tap after the previous one (_zero_after):
+    only the running sums stay live."""
+    major = major_taps(taps // 2)
+    per_group = len(major) // MIXTURE_COMPONENTS if len(major) >= MIXTURE_COMPONENTS else 1
+    groups = [[0.0, 0.0] for _ in range(MIXTURE_COMPONENTS)]
+    tap_at = _pixel_taps(b, gin, filter_stddev_px, share)
+    s_t = 0.0
+    for side in (-1.0, 1.0):
+        for index, t in enumerate(major):
+            tap = noise_model.distorted_vector(b, tap_at(side, t, s_t), gin.outputs["Scale"], model, gin.outputs["W"])
+            s_t = 0.0
+            for i, weight in enumerate(weights):
+                scale = b.math("MULTIPLY", gin.outputs["Scale"], model.lacunarity ** i)
+                fac = noise_model.octave_fac(b, tap, scale, model)
+                s_t = b.math("MULTIPLY_ADD", b.math("SUBTRACT", fac, 0.5), weight, s_t)
+            k = index // per_group if len(major) >= MIXTURE_COMPONENTS else index + (side > 0) * len(major)
+            groups[k][0] = b.math("ADD", groups[k][0], s_t)
+            groups[k][1] = b.math("MULTIPLY_ADD", s_t, s_t, groups[k][1])
+    size = taps // MIXTURE_COMPONENTS
+    means = [b.math("MULTIPLY", total, 1.0 / size) for total, _ in groups]
+    spreads = [b.math("SUBTRACT", b.math("MULTIPLY", square, 1.0 / size), b.math("MULTIPLY", m, m))
+               for m, (_, square) in zip(means, groups)]
+    mean = b.math("MULTIPLY", b.math("ADD", b.math("ADD", means[0], means[1]), b.math("ADD", means[2], means[3])),
+                  1.0 / MIXTURE_COMPONENTS)
+    square = b.math("ADD", b.math("ADD", groups[0][1], groups[1][1]), b.math("ADD", groups[2][1], groups[3][1]))
+    # The taps' spread: the local within-pixel variance of the octaves the
+    # mean keeps (exact for a field linear across the pixel).
+    spread = b.math("MAXIMUM", b.math("SUBTRACT", b.math("MULTIPLY", square, 1.0 / taps),
+                                      b.math("MULTIPLY", mean, mean)), 0.0)
+    offsets = b.combine(*[b.math("SUBTRACT", m, mean) for m in means[:3]])
+    variances = b.combine(*[b.math("SUBTRACT", b.math("MAXIMUM", w, 0.0), spread) for w in spreads[:3]])
+    return mean, spread, offsets, variances
 
 
 def _octave_fraction(b, octave_image, table, log2_s, v, log2_octave, after=None):
@@ -550,11 +656,10 @@ def _footprint_principal_axes(b, axis_u, axis_v):
     return major_axis, minor_axis
 
 
-def _pixel_taps(b, gin, filter_stddev_px, share, centre_weight):
-    """The 16 taps' (n, t) and a function making the tap position in the
-    noise's coordinates, P + (1 − β)·Centre Offset + τ(n·m + t·M), τ = share·κ:
-    world offsets taken there by the object's inverse transform (directions)
-    and Units per World (lengths)."""
+def _pixel_taps(b, gin, filter_stddev_px, share):
+    """A function making the tap at (n, t) in the noise's coordinates,
+    P + τ(n·m + t·M), τ = share·κ: world offsets taken there by the object's
+    inverse transform (directions) and Units per World (lengths)."""
     axis_u, axis_v = gin.outputs["Axis U"], gin.outputs["Axis V"]
     ref = b.vmath("ADD", axis_u, axis_v)
     k = b.math("DIVIDE", b.math("MULTIPLY", b.vmath("LENGTH", ref), gin.outputs["Units per World"]),
@@ -563,8 +668,7 @@ def _pixel_taps(b, gin, filter_stddev_px, share, centre_weight):
     tau = b.math("MULTIPLY", b.math("MULTIPLY", k, filter_stddev_px), share)
     km = b.vscale(_world_to_object(b, major_axis), tau)
     kn = b.vscale(_world_to_object(b, minor_axis), tau)
-    base = b.vmath("ADD", gin.outputs["Vector"], b.vscale(_world_to_object(b, gin.outputs["Centre Offset"]),
-                                                          b.math("MULTIPLY", k, centre_weight)))
+    base = gin.outputs["Vector"]
 
     def tap(side, t, after):
         """The tap at n = side, t along M, ordered after the value `after`."""
@@ -572,7 +676,7 @@ def _pixel_taps(b, gin, filter_stddev_px, share, centre_weight):
         if isinstance(after, bpy.types.NodeSocket):
             offset = b.vmath("ADD", offset, _zero_after(b, after))   # a float read as (z, z, z)
         return b.vmath("ADD", base, offset)
-    return [(side, t) for side in (-1.0, 1.0) for t in MAJOR_TAPS], tap
+    return tap
 
 
 def _zero_after(b, value):

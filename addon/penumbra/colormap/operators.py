@@ -218,6 +218,12 @@ class BakePlan:
         if warning:
             self.warnings.append(warning)
         self.filter_stddev = noise_statistics.pixel_filter_stddev(context.scene)
+        self.taps = node_groups.tap_count(model, context.scene.render.engine)
+        if self.taps < node_groups.TAP_COUNT:
+            self.warnings.append(f"EEVEE: the noise filter uses {self.taps} taps, not {node_groups.TAP_COUNT} "
+                                 f"({node_groups.noise_evaluations_per_tap(model)} Noise evaluations per tap: "
+                                 "Detail and Distortion), so that EEVEE can compile the material; bake again "
+                                 "after switching to Cycles for the full filter")
 
     def _output_folder(self):
         folder = self.settings.output_folder or "//penumbra_luts/"
@@ -309,7 +315,7 @@ class BakePlan:
             return {"image": image, "path": path, "group": group, "node": None}
         tree = self.material.node_tree
         ramp = self.node
-        group = node_groups.filtered_ramp_group(image, self.spec)
+        group = node_groups.filtered_ramp_group(image, self.spec, mixture=self.noise is not None)
         group_node = tree.nodes.new("ShaderNodeGroup")
         group_node.node_tree = group
         group_node.name = group_node.label = node_groups.FILTERED_RAMP
@@ -338,7 +344,14 @@ class BakePlan:
         octave_image, table = noise_statistics.octave_image(self.folder)
         noise_filter = tree.nodes.new("ShaderNodeGroup")
         noise_filter.node_tree = node_groups.noise_filter_group(octave_image, table, self.noise_model,
-                                                                self.filter_stddev)
+                                                                self.filter_stddev, self.taps)
+        eevee_taps = node_groups.tap_count(self.noise_model, "BLENDER_EEVEE")
+        if eevee_taps < self.taps:
+            # Too costly for EEVEE at this many taps: keep a smaller group
+            # for it, which the render_init handler swaps in.
+            noise_filter[sample_count.GROUP_FOR_CYCLES] = noise_filter.node_tree
+            noise_filter[sample_count.GROUP_FOR_EEVEE] = node_groups.noise_filter_group(
+                octave_image, table, self.noise_model, self.filter_stddev, eevee_taps)
         sample_count.drive_samples(noise_filter, self.scene)
         noise_filter.name = noise_filter.label = "Penumbra Noise Filter"
         noise_filter.location = (group_node.location.x - 220, group_node.location.y + 40)
@@ -360,7 +373,7 @@ class BakePlan:
             tree.links.new(coords.outputs["Generated"], noise_filter.inputs["Vector"])
         tree.links.new(footprint.outputs["Minor"], noise_filter.inputs["Minor"])
         tree.links.new(footprint.outputs["Major"], noise_filter.inputs["Major"])
-        for name in ("Axis U", "Axis V", "Centre Offset"):
+        for name in ("Axis U", "Axis V"):
             tree.links.new(footprint.outputs[name], noise_filter.inputs[name])
         model = self.noise_model
         for name, source, value in (("Scale", model.scale_from, model.scale), ("W", model.w_from, model.w)):
@@ -369,8 +382,8 @@ class BakePlan:
             elif value is not None:
                 noise_filter.inputs[name].default_value = value
         noise_filter.inputs["Units per World"].default_value = self.coordinate_scale
-        tree.links.new(noise_filter.outputs["Mean"], group_node.inputs["Mean"])
-        tree.links.new(noise_filter.outputs["Sigma"], group_node.inputs["Sigma"])
+        for name in ("Mean", "Sigma", "Offsets", "Variances"):
+            tree.links.new(noise_filter.outputs[name], group_node.inputs[name])
 
 
 class _Rollback:

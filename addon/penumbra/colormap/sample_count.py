@@ -1,6 +1,8 @@
-"""How the Noise Filter learns the render's sample count: a driver on its
-Samples input that reads the scene's render samples of the engine it renders
-with (docs/colormap.md, "Sample-count-aware filter").
+"""How the Noise Filter follows the render: a driver on its Samples input
+that reads the scene's render samples of the engine it renders with
+(docs/colormap.md, "Sample-count-aware filter"), and, for a noise too costly
+for EEVEE at 16 taps, the smaller group the bake made for EEVEE, swapped in
+when a render starts with EEVEE and out again with Cycles.
 
 A single-property driver needs no Python at render time, so the .blend
 renders the same on a farm without the add-on or with scripts disabled. A
@@ -12,6 +14,11 @@ import bpy
 from bpy.app.handlers import persistent
 
 NOISE_FILTER_PREFIX = "Penumbra Noise Filter"
+# Custom properties of a Noise Filter node whose noise EEVEE gets fewer taps
+# for (node_groups.tap_count): the group each engine renders with.
+GROUP_FOR_CYCLES = "penumbra_group_cycles"
+GROUP_FOR_EEVEE = "penumbra_group_eevee"
+EEVEE_ENGINES = ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")
 
 # Render sample count per engine: the same RNA paths in 3.4, 4.x and 5.x
 # (EEVEE Next in 4.2+ kept taa_render_samples).
@@ -74,22 +81,35 @@ def noise_filter_nodes(material):
             and "Samples" in n.inputs]
 
 
+def fit_group(node, scene):
+    """Gives `node` the group baked for `scene`'s engine, where the bake made
+    one per engine; returns whether it changed."""
+    key = GROUP_FOR_EEVEE if scene.render.engine in EEVEE_ENGINES else GROUP_FOR_CYCLES
+    group = node.get(key)
+    if not isinstance(group, bpy.types.ShaderNodeTree) or node.node_tree == group:
+        return False
+    node.node_tree = group
+    return True
+
+
 def retarget(scene):
-    """Points every Noise Filter's driver at `scene`'s engine; returns how
-    many drivers were changed."""
+    """Points every Noise Filter's driver at `scene`'s engine and gives it
+    the engine's group (fit_group); returns how many nodes were changed."""
     path = samples_path(scene)
     changed = 0
     for material in bpy.data.materials:
         if material.library is not None:
             continue
         for node in noise_filter_nodes(material):
+            swapped = fit_group(node, scene)
             tree = node.id_data
             data_path = node.inputs["Samples"].path_from_id("default_value")
             curve = tree.animation_data.drivers.find(data_path) if tree.animation_data else None
             current = curve.driver.variables[0].targets[0] if curve and len(curve.driver.variables) else None
-            if current is None or current.data_path != path or current.id != scene:
+            repointed = current is None or current.data_path != path or current.id != scene
+            if repointed:
                 drive_samples(node, scene)
-                changed += 1
+            changed += swapped or repointed
     return changed
 
 

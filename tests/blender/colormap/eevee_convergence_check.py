@@ -49,8 +49,9 @@ def lookup_at_zero_sigma(ctx, folder):
     plain = render(ctx, folder, "lookup_plain", 1)
     harness.set_method(ctx, "penumbra")
     saved = [link.from_socket for link in group.inputs["Sigma"].links]
-    for link in list(group.inputs["Sigma"].links) + list(group.inputs["Mean"].links):
-        tree.links.remove(link)
+    for name in ("Sigma", "Mean", "Offsets", "Variances"):   # one Gaussian, σ = 0
+        for link in list(group.inputs[name].links):
+            tree.links.remove(link)
     group.inputs["Sigma"].default_value = 0.0
     tree.links.new(noise.outputs["Fac"], group.inputs["Mean"])
     looked_up = render(ctx, folder, "lookup_filtered", 1)

@@ -62,13 +62,17 @@ def test_bake_replaces_a_noise_driven_ramp_and_keeps_the_original(addon, tmp_pat
     tree = material.node_tree
     group_node = tree.nodes[node_groups.FILTERED_RAMP]
     assert group_node.node_tree.name.startswith(node_groups.FILTERED_RAMP)
-    assert interface.socket_names(group_node.node_tree, "INPUT") == ["Mean", "Sigma"]
+    # Noise-driven: the ramp reads the Noise Filter's four-Gaussian mixture.
+    assert interface.socket_names(group_node.node_tree, "INPUT") == ["Mean", "Sigma", "Offsets", "Variances"]
     assert interface.socket_names(group_node.node_tree, "OUTPUT") == ["Color", "Alpha"]
     bsdf = tree.nodes["Principled BSDF"]
     assert bsdf.inputs["Base Color"].links[0].from_node == group_node
     assert ramp.mute and ramp.name in tree.nodes
     noise_filter = group_node.inputs["Sigma"].links[0].from_node
     assert noise_filter.node_tree.name.startswith("Penumbra Noise Filter")
+    for name in ("Mean", "Offsets", "Variances"):
+        assert group_node.inputs[name].links[0].from_socket == noise_filter.outputs[name]
+    assert noise_filter.node_tree["penumbra_taps"] == node_groups.TAP_COUNT   # Cycles: every tap
     # The noise's (unlinked, so Generated) coordinates and its Scale feed the octave filter.
     coords = noise_filter.inputs["Vector"].links[0].from_node
     assert coords.bl_idname == "ShaderNodeTexCoord" and noise_filter.inputs["Vector"].links[0].from_socket.name == "Generated"
@@ -239,7 +243,8 @@ def test_bake_from_an_image_makes_a_lookup_and_group(addon, tmp_path):
     pixels[..., 3] = 1
     image.pixels.foreach_set(pixels.ravel())
     assert bpy.ops.penumbra.bake_colormap_lut(image_name="strip") == {"FINISHED"}
-    assert any(g.name.startswith(node_groups.FILTERED_RAMP) for g in bpy.data.node_groups)
+    (group,) = [g for g in bpy.data.node_groups if g.name.startswith(node_groups.FILTERED_RAMP)]
+    assert interface.socket_names(group, "INPUT") == ["Mean", "Sigma"]   # no noise: one Gaussian, one lookup
     assert os.path.isfile(os.path.join(str(tmp_path), "strip_lut.exr"))
 
 

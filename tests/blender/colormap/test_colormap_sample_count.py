@@ -118,3 +118,59 @@ def test_high_detail_with_distortion_fits_cycles_shader_stack(addon, tmp_path):
     ground = plain.sum(axis=2) > 0
     assert ground.mean() > 0.3
     np.testing.assert_allclose(filtered[ground].mean(axis=0), plain[ground].mean(axis=0), atol=0.05)
+
+
+def test_eevee_gets_a_noise_filter_it_can_compile(addon, tmp_path):
+    """EEVEE compiles the material as one shader whose memory grows faster
+    than linearly with its Noise nodes (Detail 8 with Distortion at 16 taps
+    ran llvmpipe out of 24 GiB): baked for EEVEE, a costly noise gets fewer
+    taps, at most EEVEE_NOISE_BUDGET Noise Textures; a cheap one, and any
+    noise baked for Cycles, keeps all 16."""
+    addon.penumbra.colormap.output_folder = str(tmp_path)
+    material, ramp, emission, camera = _render_scene(addon, 70.0)
+    noise = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeTexNoise")
+    eevee = "BLENDER_EEVEE_NEXT" if (4, 2, 0) <= bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"
+    counts = {}
+    for engine, detail, distortion in (("CYCLES", 8.0, 0.5), (eevee, 8.0, 0.5), (eevee, 4.0, 0.0),
+                                       (eevee, 2.0, 0.0)):
+        addon.render.engine = engine
+        noise.inputs["Detail"].default_value, noise.inputs["Distortion"].default_value = detail, distortion
+        material.node_tree.nodes.active = ramp
+        assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
+        group = _noise_filter(material).node_tree
+        textures = sum(n.bl_idname == "ShaderNodeTexNoise" for n in group.nodes)
+        counts[engine, detail] = (group["penumbra_taps"], textures)
+        assert bpy.ops.penumbra.restore_color_ramp() == {"FINISHED"}
+    assert counts["CYCLES", 8.0] == (16, 16 * 12)          # 9 octaves + 3 distortion noises per tap
+    assert counts[eevee, 8.0] == (4, 4 * 12)
+    assert counts[eevee, 4.0] == (8, 8 * 5)
+    assert counts[eevee, 2.0] == (16, 16 * 3)
+    assert all(textures <= node_groups.EEVEE_NOISE_BUDGET for (engine, _), (_, textures) in counts.items()
+               if engine != "CYCLES")
+
+
+def test_the_render_swaps_in_the_group_baked_for_its_engine(addon, tmp_path):
+    """Baked for Cycles, a noise too costly for EEVEE at 16 taps also gets a
+    4-tap group; a render with EEVEE (the render_init handler) swaps it in,
+    one with Cycles back, links, driver and values kept."""
+    addon.penumbra.colormap.output_folder = str(tmp_path)
+    material, ramp, emission, camera = _render_scene(addon, 70.0)
+    addon.render.resolution_x, addon.render.resolution_y = 8, 6
+    noise = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeTexNoise")
+    noise.inputs["Detail"].default_value, noise.inputs["Distortion"].default_value = 8.0, 0.5
+    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
+    node = _noise_filter(material)
+    links = sorted((l.from_socket.name, l.to_socket.name) for l in material.node_tree.links
+                   if node in (l.from_node, l.to_node))
+    assert len(links) == 9 and node.node_tree["penumbra_taps"] == 16   # 5 in (Vector, footprint), 4 out
+    units = node.inputs["Units per World"].default_value
+    addon.render.engine = "BLENDER_EEVEE_NEXT" if (4, 2, 0) <= bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"
+    assert sample_count.retarget(addon) == 1
+    assert node.node_tree["penumbra_taps"] == 4 and _driver_target(node).data_path == "eevee.taa_render_samples"
+    assert sorted((l.from_socket.name, l.to_socket.name) for l in material.node_tree.links
+                  if node in (l.from_node, l.to_node)) == links
+    addon.render.engine = "CYCLES"
+    image = _render(addon, str(tmp_path / "tiny.exr"), 2, 0)          # render_init swaps back
+    assert node.node_tree["penumbra_taps"] == 16 and _driver_target(node).data_path == "cycles.samples"
+    assert node.inputs["Units per World"].default_value == units
+    assert image.sum(axis=2).mean() > 0.05   # not black
