@@ -15,7 +15,7 @@ import _penumbra
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import lights_make_test_videos as videos  # noqa: E402
-from lights_median_cut import median_cut  # noqa: E402
+from lights_median_cut import median_cut, median_cut_suns  # noqa: E402
 
 from conftest import BLENDER_OCIO  # noqa: E402
 
@@ -45,11 +45,35 @@ def test_region_lights_are_within_1_2x_median_cut_irradiance_error_of_a_bundled_
     reference = numpy_irradiance(np.maximum(image, 0), normals)
     ours, baseline = {}, {}
     for n in (16, 64, 256):
-        lights = _penumbra.lights.frame_lights(image, count=n)
+        lights = _penumbra.lights.frame_lights(image, count=n, fit_irradiance=False)
         ours[n] = relative_irradiance_error(lights["directions"], lights["rgb"], normals, reference)
         baseline[n] = relative_irradiance_error(*median_cut(np.maximum(image, 0), n), normals, reference)
     assert ours[256] < ours[16]
     assert ours[64] <= 1.2 * baseline[64], (ours, baseline)
+
+
+@pytest.mark.parametrize("sun_model", ["BLENDER3_DISC", "BLENDER4_CONE"])
+def test_the_fitted_rig_has_at_most_half_median_cuts_irradiance_error_drawn_as_suns(sun_model):
+    """Issue #14 goal 1 on its hardest case: sunrise.exr at 16 lights, where
+    median cut puts four suns on the sun. Both rigs drawn as this Blender
+    draws suns (each with its region's or rectangle's angle), against a
+    numpy reference over 300 normals. The fit that kept the regions' angles
+    and moved lights at most one spread scored 1.6× (3.4) and 1.4× (4.x);
+    now about 0.1×."""
+    image = np.maximum(videos.load_world("sunrise", 256), 0)
+    normals = _penumbra.sh.fibonacci_directions(300)
+    reference = numpy_irradiance(image, normals)
+    y = np.array([0.2126, 0.7152, 0.0722])
+
+    def error(d, rgb, spread):
+        e = _penumbra.lights.irradiance(d, rgb, normals, spread=spread, sun_model=sun_model)
+        return math.sqrt((((e - reference) @ y) ** 2).sum() / ((reference @ y) ** 2).sum())
+
+    fitted = _penumbra.lights.frame_lights(image, count=16, fit_irradiance=True, sun_model=sun_model)
+    np.testing.assert_allclose(fitted["rgb"].sum(axis=0), fitted["total_rgb"], rtol=1e-12)
+    ours = error(fitted["directions"], fitted["rgb"], fitted["spread"])
+    baseline = error(*median_cut_suns(image, 16))
+    assert ours <= 0.5 * baseline, (ours, baseline)
 
 
 def test_exact_irradiance_binding_agrees_with_numpy():
@@ -168,7 +192,7 @@ def test_truncated_video_is_an_io_error(tmp_path):
 
 
 def test_clustering_and_region_tables_through_the_bindings():
-    lights = _penumbra.lights.frame_lights(videos.load_world("courtyard", 256), count=200)
+    lights = _penumbra.lights.frame_lights(videos.load_world("courtyard", 256), count=200, fit_irradiance=False)
     c = _penumbra.lights.cluster(lights["directions"], lights["rgb"], max_clusters=20)
     assert len(c["index"]) <= 20
     np.testing.assert_allclose(c["rgb"].sum(axis=0), lights["rgb"].sum(axis=0), rtol=1e-9)
