@@ -25,6 +25,7 @@ struct Problem {
     std::vector<Eigen::Vector3d> start;
     std::vector<double> bound;     // max angle from start
     double max_half = 0.0;         // > 0: half-angles are fitted in [0, max_half]
+    bool upper_hemisphere = false; // a hemispherical map's lights stay at z ≥ 0
     Eigen::MatrixXd prior;         // N × 3 expected colours (empty: none)
     double ridge = 0.0;            // weight of ‖x − prior‖²
     Eigen::RowVector3d flux;       // the map's ∫L dω per channel, the colours' sum (keep_flux)
@@ -177,6 +178,11 @@ Shape trial_shape(const Problem& p, const Shape& s, const Eigen::VectorXd& step,
     for (std::size_t k = 0; k < s.dirs.size(); ++k) {
         const Eigen::Index o = Eigen::Index(k) * per_light;
         out.dirs[k] = moved(s.dirs[k], step[o], step[o + 1], p.start[k], p.bound[k]);
+        if (p.upper_hemisphere && out.dirs[k].z() < 0.0) {
+            // Onto the horizon (a light of a hemispherical map is never below it).
+            const Eigen::Vector3d flat(out.dirs[k].x(), out.dirs[k].y(), 0.0);
+            out.dirs[k] = flat.norm() > 1e-12 ? Eigen::Vector3d(flat.normalized()) : s.dirs[k];
+        }
         // K is nearly flat in h for a narrow sun (1 − O(h²)), where the
         // Gauss–Newton step can be huge: at most half of h (or of a degree).
         if (per_light == 3) {
@@ -345,6 +351,7 @@ IrradianceFitResult fit_irradiance(const EnvironmentMap& map, std::vector<Light>
     Problem p;
     p.model = options.sun_model;
     p.threads = options.threads;
+    p.upper_hemisphere = !map.full_sphere;
     // Six normals per light (18 residuals for its 6 unknowns) at least 642.
     const int normals = options.normal_count > 0 ? options.normal_count
                                                  : std::clamp(6 * int(lights.size()), 642, 2562);

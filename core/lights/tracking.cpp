@@ -61,6 +61,10 @@ FrameLights LightTracker::next(const EnvironmentMap& map, bool& cut) {
             cut = true;
         else
             rotation = counted_rotation(m);
+        // A hemispherical map (its lower half unseen) can only turn about +z.
+        if (!map.full_sphere)
+            rotation = Eigen::AngleAxisd(std::atan2(rotation(1, 0), rotation(0, 0)), Eigen::Vector3d::UnitZ())
+                           .toRotationMatrix();
     }
     FrameLights out = cut ? start(map) : follow(map, rotation);
     signature_ = std::move(signature);

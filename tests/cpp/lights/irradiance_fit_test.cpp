@@ -144,6 +144,17 @@ TEST(LightsIrradianceFit, fitting_the_sun_angles_helps_where_regions_are_wide) {
     }
 }
 
+TEST(LightsIrradianceFit, lights_of_a_hemispherical_map_stay_above_the_horizon) {
+    // A sky and a low sun over a black ground: irradiance from below the
+    // horizon is zero, but a wide sun leaning below it could still fit the
+    // normals' irradiance; the fit keeps every light at z ≥ 0.
+    Image sky = testing::sky_and_sun(256, 64, 0.3, Eigen::Vector3d(0.8, 0.2, 0.08), 0.08, 400.0);
+    const EnvironmentMap map = as_map(sky, Projection::hemisphere_polar);
+    for (int count : {4, 24})
+        for (const Light& l : rig(map, count, true, SunModel::blender4_cone).lights)
+            EXPECT_GE(l.direction.z(), 0.0) << "N " << count;
+}
+
 TEST(LightsIrradianceFit, a_black_map_gives_black_lights) {
     const EnvironmentMap map = as_map(testing::constant_image(64, 32, 0, 0, 0));
     const FrameLights f = rig(map, 8, true, SunModel::blender4_cone);
