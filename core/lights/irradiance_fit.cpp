@@ -343,31 +343,26 @@ double fit_reach(const EnvironmentMap& map, const Light& light, double reach) {
     return reach * std::max(light.spread, row_angle);
 }
 
-IrradianceFitResult fit_irradiance(const EnvironmentMap& map, std::vector<Light>& lights,
-                                   const IrradianceFitOptions& options) {
-    check_options(options, lights.size());
-    IrradianceFitResult result;
-    if (lights.empty() || map.width == 0) return result;
+namespace {
+
+// The problem and the starting shape and colours of `lights`.
+Problem make_problem(const EnvironmentMap& map, const std::vector<Light>& lights, const IrradianceFitOptions& options,
+                     Shape& shape, Eigen::MatrixXd& x) {
     Problem p;
     p.model = options.sun_model;
     p.threads = options.threads;
     p.upper_hemisphere = !map.full_sphere;
-    // Six normals per light (18 residuals for its 6 unknowns) at least 642.
+    // Six normals per light (18 residuals for its 6 unknowns), at least 642.
     const int normals = options.normal_count > 0 ? options.normal_count
                                                  : std::clamp(6 * int(lights.size()), 642, 2562);
     p.normals = sh::fibonacci_sphere(normals).directions;
     p.target = target_irradiance(map, p.normals, options);
-    if (!(p.target.cwiseAbs().maxCoeff() > 0.0)) {
-        for (Light& l : lights) l.rgb.setZero(), l.power = 0.0;
-        return result;
-    }
     const double widest = p.model == SunModel::blender3_disc ? max_disc_half_angle : 0.5 * std::numbers::pi;
     p.max_half = options.fit_angles && p.model != SunModel::point ? widest : 0.0;
     const Eigen::Index n = Eigen::Index(lights.size());
-    Shape shape;
-    Eigen::MatrixXd x(n, 3);
+    x.resize(n, 3);
     for (Eigen::Index k = 0; k < n; ++k) {
-        const Light& l = lights[k];
+        const Light& l = lights[std::size_t(k)];
         shape.dirs.push_back(l.direction);
         const double h = sun_half_angle(l.spread);
         shape.half.push_back(options.fit_angles ? std::min(h, widest) : h);
@@ -376,14 +371,49 @@ IrradianceFitResult fit_irradiance(const EnvironmentMap& map, std::vector<Light>
         p.bound.push_back(options.move_bound.empty() ? fit_reach(map, l, options.reach)
                                                      : options.move_bound[std::size_t(k)]);
     }
-    Eigen::MatrixXd a;
-    kernels(p, shape, a, nullptr, nullptr);
-    result.error_before = relative_rmse(a * x, p.target, options.luminance);
     if (!options.prior_rgb.empty() && options.prior_weight > 0.0) {
+        Eigen::MatrixXd a;
+        kernels(p, shape, a, nullptr, nullptr);
         p.prior.resize(n, 3);
         for (Eigen::Index k = 0; k < n; ++k) p.prior.row(k) = options.prior_rgb[std::size_t(k)].transpose();
         p.ridge = options.prior_weight * a.colwise().squaredNorm().mean();
     }
+    return p;
+}
+
+// The colours once more for the final shape, their sum held to the map's
+// ∫L dω by a penalty strong enough that it is off by ~1e-8 (rank one on the
+// normal equations: with G ≈ diagonal the sum's error shrinks by
+// 1 + w·N/mean G_kk), then rescaled to it exactly.
+void hold_the_flux(const EnvironmentMap& map, const Shape& shape, Problem& p, Eigen::MatrixXd& x) {
+    Eigen::MatrixXd a;
+    kernels(p, shape, a, nullptr, nullptr);
+    p.flux = integral_rgb(map).transpose();
+    p.flux_weight = 1e4 * a.colwise().squaredNorm().mean() / double(x.rows());
+    nonnegative_colours(p, a, x);
+    for (int c = 0; c < 3; ++c) {
+        const double sum = x.col(c).sum();
+        if (sum > 0.0) x.col(c) *= p.flux[c] / sum;
+    }
+}
+
+}  // namespace
+
+IrradianceFitResult fit_irradiance(const EnvironmentMap& map, std::vector<Light>& lights,
+                                   const IrradianceFitOptions& options) {
+    check_options(options, lights.size());
+    IrradianceFitResult result;
+    if (lights.empty() || map.width == 0) return result;
+    Shape shape;
+    Eigen::MatrixXd x;
+    Problem p = make_problem(map, lights, options, shape, x);
+    if (!(p.target.cwiseAbs().maxCoeff() > 0.0)) {
+        for (Light& l : lights) l.rgb.setZero(), l.power = 0.0;
+        return result;
+    }
+    Eigen::MatrixXd a;
+    kernels(p, shape, a, nullptr, nullptr);
+    result.error_before = relative_rmse(a * x, p.target, options.luminance);
 
     double mu = 0.1;
     double error = solved_objective(p, shape, x);
@@ -393,30 +423,16 @@ IrradianceFitResult fit_irradiance(const EnvironmentMap& map, std::vector<Light>
         ++result.steps;
         if (before - error < options.tolerance * before) break;
     }
+    if (options.keep_flux) hold_the_flux(map, shape, p, x);
     kernels(p, shape, a, nullptr, nullptr);
     result.error_after = relative_rmse(a * x, p.target, options.luminance);
 
-    if (options.keep_flux) {
-        // The colours once more for the final shape, their sum held to the
-        // map's ∫L dω by a penalty strong enough that it is off by ~1e-8
-        // (rank one on the normal equations: with G ≈ diagonal the sum's
-        // error shrinks by 1 + w·N/mean G_kk), then rescaled exactly.
-        kernels(p, shape, a, nullptr, nullptr);
-        p.flux = integral_rgb(map).transpose();
-        p.flux_weight = 1e4 * a.colwise().squaredNorm().mean() / double(n);
-        nonnegative_colours(p, a, x);
-    }
-    if (options.keep_flux)
-        for (int c = 0; c < 3; ++c) {
-            const double sum = x.col(c).sum();
-            if (sum > 0.0) x.col(c) *= p.flux[c] / sum;
-        }
-    for (Eigen::Index k = 0; k < n; ++k) {
+    for (std::size_t k = 0; k < lights.size(); ++k) {
         Light& l = lights[k];
         l.direction = shape.dirs[k];
         // The add-on draws a sun of half-angle √2·spread (sun_half_angle).
         if (p.max_half > 0.0) l.spread = shape.half[k] / std::numbers::sqrt2;
-        l.rgb = x.row(k).transpose();
+        l.rgb = x.row(Eigen::Index(k)).transpose();
         l.power = options.luminance[0] * l.rgb[0] + options.luminance[1] * l.rgb[1] + options.luminance[2] * l.rgb[2];
     }
     return result;
