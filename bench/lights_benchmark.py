@@ -11,12 +11,16 @@ sqrt(Σ_n ΔY²) / sqrt(Σ_n Y_ref²) on luminance.
 Flicker: slowly rotating map (0.5°/frame) and a map with 100 Hz mains flicker
 at 21 fps plus sensor noise; per frame the relative RMS change of irradiance
 on 200 normals between consecutive frames, minus nothing (the reference's own
-change is printed beside it). Variants: temporally filtered rig,
-unfiltered rig (tracked, same points every frame), and lights resampled per
-frame without tracking (a fresh Cranley–Patterson shift of the points each
-frame, so no light keeps its place).
+change is printed beside it). Variants (FLICKER_VARIANTS): the default rig
+(followed, fitted, filtered, each frame its own brightness), the same with
+the brightness low-passed too (the paper's), the rig before issue #14
+(resampled, no fit, filtered), and lights resampled per frame without
+tracking (a fresh Cranley–Patterson shift of the points each frame, so no
+light keeps its place).
 
-Writes docs/lights-benchmark.md."""
+Writes docs/lights-benchmark.md, keeping its "Irradiance fit" and "Video"
+sections, which bench/lights_fit_benchmark.py and lights_video_benchmark.py
+write."""
 
 import math
 import os
@@ -32,6 +36,7 @@ from lights_median_cut import median_cut  # noqa: E402
 import _penumbra  # noqa: E402  (lights_make_test_videos put it on sys.path)
 sys.path.insert(0, os.path.join(ROOT, "bench"))
 import lights_fit_benchmark  # noqa: E402
+import lights_video_benchmark  # noqa: E402
 
 Y = np.array([0.2126, 0.7152, 0.0722])
 COUNTS = (4, 16, 64, 256, 1024)
@@ -44,14 +49,21 @@ def rel_rmse(e, ref):
 
 
 def accuracy(maps, normals):
+    # The region and equal rows without the irradiance fit (LightOptions'
+    # default since issue #14); the fit's own row fits and is measured as
+    # point lights, as the rest of this table (bench/lights_fit_benchmark.py
+    # measures it drawn as suns). Above 256 lights the fit is not run.
+    plain = dict(fit_irradiance=False)
     variants = {
         "median cut (Debevec 2005)": None,
-        "paper: equal power, Havran": dict(power="EQUAL", sampler="HAVRAN"),
-        "equal power, standard": dict(power="EQUAL", sampler="STANDARD"),
-        "equal power, Havran, blue noise": dict(power="EQUAL", sampler="HAVRAN", blue_noise=True),
-        "region power, Havran": dict(power="REGION", sampler="HAVRAN"),
-        "region power, standard": dict(power="REGION", sampler="STANDARD"),
-        "region power, Havran, blue noise": dict(power="REGION", sampler="HAVRAN", blue_noise=True),
+        "paper: equal power, Havran": dict(power="EQUAL", sampler="HAVRAN", **plain),
+        "equal power, standard": dict(power="EQUAL", sampler="STANDARD", **plain),
+        "equal power, Havran, blue noise": dict(power="EQUAL", sampler="HAVRAN", blue_noise=True, **plain),
+        "region power, Havran": dict(power="REGION", sampler="HAVRAN", **plain),
+        "region power, standard": dict(power="REGION", sampler="STANDARD", **plain),
+        "region power, Havran, blue noise": dict(power="REGION", sampler="HAVRAN", blue_noise=True, **plain),
+        "region power + irradiance fit (default; N ≤ 256)": dict(power="REGION", sampler="HAVRAN",
+                                                                 fit_irradiance=True, sun_model="POINT"),
         "region, 4N lights clustered to <= N": "cluster",
     }
     table = {name: {} for name in variants}
@@ -62,7 +74,8 @@ def accuracy(maps, normals):
                 if kind is None:
                     d, rgb = median_cut(image, n)
                 elif kind == "cluster":
-                    lights = _penumbra.lights.frame_lights(image, count=min(4 * n, 4096), max_width=0)
+                    lights = _penumbra.lights.frame_lights(image, count=min(4 * n, 4096), max_width=0,
+                                                           fit_irradiance=False)
                     c = _penumbra.lights.cluster(lights["directions"], lights["rgb"], max_clusters=n)
                     d, rgb = c["directions"], c["rgb"]
                 else:
@@ -74,23 +87,31 @@ def accuracy(maps, normals):
     return table
 
 
+FLICKER_VARIANTS = {
+    "default (followed, fitted, filtered)": {},
+    "filter brightness too (the paper's)": {"filter_brightness": True},
+    "resampled, filtered (before issue #14)": {"tracking": "RESAMPLE", "fit_irradiance": False,
+                                               "filter_brightness": True},
+}
+
+
 def flicker_of(sequence, normals, rig_kind, fps):
-    """Mean relative RMS frame-to-frame irradiance change."""
+    """Mean relative RMS frame-to-frame irradiance change of the rig's suns (4.x cone)."""
     n = 64
     if rig_kind == "untracked":
         rng = np.random.default_rng(7)
         es = []
         for f in sequence:
-            l = _penumbra.lights.frame_lights(f, count=n, shift=tuple(rng.random(2)))
-            es.append(_penumbra.lights.irradiance(l["directions"], l["rgb"], normals))
+            l = _penumbra.lights.frame_lights(f, count=n, shift=tuple(rng.random(2)), fit_irradiance=False)
+            es.append(_penumbra.lights.irradiance(l["directions"], l["rgb"], normals, spread=l["spread"]))
     elif rig_kind == "reference":
         es = [_penumbra.lights.exact_irradiance(f, normals) for f in sequence]
     else:
-        b = _penumbra.lights.RigBuilder(count=n, temporal_filter=(rig_kind == "filtered"), frames_per_second=fps)
+        b = _penumbra.lights.RigBuilder(count=n, frames_per_second=fps, **FLICKER_VARIANTS[rig_kind])
         for f in sequence:
             b.add_frame(f)
         rig = b.finish()
-        es = [_penumbra.lights.irradiance(rig["directions"][t], rig["rgb"][t], normals)
+        es = [_penumbra.lights.irradiance(rig["directions"][t], rig["rgb"][t], normals, spread=rig["spread"][t])
               for t in range(len(sequence))]
     changes = []
     for a, b in zip(es, es[1:]):
@@ -218,7 +239,7 @@ def main():
     flicker = {}
     for name, (seq, fps) in sequences.items():
         flicker[name] = {k: flicker_of(seq, fnormals, k, fps)
-                         for k in ("reference", "filtered", "unfiltered", "untracked")}
+                         for k in ("reference", *FLICKER_VARIANTS, "untracked")}
         print(f"  flicker {name}: {flicker[name]}", flush=True)
 
     lines = ["# Light-rig benchmark results", "",
@@ -233,14 +254,18 @@ def main():
         cells = [f"{100 * row[n]:.2f}% ({row[n] / base[n]:.2f}×)" for n in COUNTS]
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     lines += ["", "## Temporal flicker", "",
-              "Mean relative RMS change of irradiance on 200 normals between consecutive frames, 64 lights, "
-              "forest.exr at 256x128, 40 frames (the first and last 4 frame pairs left out). `reference` is the "
-              "map's own change (what a perfect rig would show).", "",
-              "| sequence | reference | filtered (tracked) | unfiltered (tracked) | resampled per frame, untracked |",
-              "|---|---|---|---|---|"]
+              "Mean relative RMS change of irradiance on 200 normals between consecutive frames, 64 lights drawn as "
+              "Blender 4.x suns, forest.exr at 256x128, 40 frames (the first and last 4 frame pairs left out). "
+              "`reference` is the map's own change (what a perfect rig would show). Since issue #14 a rig keeps "
+              "each frame's own brightness unless asked to filter it (`filter_brightness`, the add-on's "
+              "Temporal > Brightness): the default follows a lamp's flicker as the map does; the paper's way "
+              "removes it, and with it the source's real exposure changes. The video benchmark below has the "
+              "criteria of issue #14 goal 2.", "",
+              "| sequence | reference | " + " | ".join(FLICKER_VARIANTS) + " | resampled per frame, untracked |",
+              "|---|---|" + "---|" * len(FLICKER_VARIANTS) + "---|"]
     for name, row in flicker.items():
         lines.append(f"| {name} | " + " | ".join(f"{100 * row[k]:.3f}%" for k in
-                                                    ("reference", "filtered", "unfiltered", "untracked")) + " |")
+                                                    ("reference", *FLICKER_VARIANTS, "untracked")) + " |")
     lines += ["", "## Shadowed comparison (Cycles)", "",
               "A sphere on a plane under Blender's `sunrise.exr` (its sun casts a visible shadow), Cycles on the "
               f"CPU, 128x96 pixels, {SHADOW_SPP} samples, denoising off, bpy 4.5; rendered lit by the World "
@@ -267,8 +292,14 @@ def main():
         bias = math.sqrt(max(0.0, e * e - 0.5 * (shadows['noise'] ** 2 + noise ** 2)))
         lines.append(f"| {n} suns | {100 * e:.2f}% | {e / shadows['noise']:.2f}× | {100 * noise:.2f}% "
                      f"| {100 * bias:.2f}% | {shadows[f'{n} mean']:.3f} |")
-    lines += [""] + lights_fit_benchmark.run()
     path = os.path.join(ROOT, "docs", "lights-benchmark.md")
+    # The fit's and the video's sections are their own scripts' (make bench
+    # runs them after this one); kept as they are.
+    old = open(path).read() if os.path.exists(path) else ""
+    for heading in (lights_fit_benchmark.SECTION, lights_video_benchmark.SECTION):
+        if heading in old:
+            rest = old.split(heading, 1)[1]
+            lines += ["", heading + (rest[:rest.find("\n## ")] if "\n## " in rest else rest).rstrip("\n")]
     with open(path + ".tmp", "w") as f:
         f.write("\n".join(lines) + "\n")
     os.replace(path + ".tmp", path)

@@ -22,6 +22,7 @@
 #include "lights/sampling.hpp"
 #include "lights/sun_irradiance.hpp"
 #include "lights/temporal.hpp"
+#include "lights/tracking.hpp"
 #include "numpy_image.hpp"
 
 namespace py = pybind11;
@@ -106,6 +107,10 @@ void bind_enums(py::module_& m) {
         {{"REGION", PowerMode::region}, {"EQUAL", PowerMode::equal}},
         "What each light carries: REGION (the power and colour of its region of the map) or EQUAL (the paper's "
         "equal powers).");
+    bind_enum<Tracking>(m, "Tracking", "tracking",
+        {{"FOLLOW", Tracking::follow}, {"RESAMPLE", Tracking::resample}},
+        "How lights carry over between frames (core/lights/tracking.hpp): FOLLOW (turned with the map's motion "
+        "and refitted, identities kept) or RESAMPLE (the paper's: light k = point k through each frame's CDF).");
     bind_enum<SunModel>(m, "SunModel", "sun_model",
         {{"POINT", SunModel::point}, {"BLENDER3_DISC", SunModel::blender3_disc},
          {"BLENDER4_CONE", SunModel::blender4_cone}},

@@ -35,7 +35,8 @@ std::unique_ptr<PyRigBuilder> make_builder(int count, SamplerKind sampler, bool 
                                            bool temporal_filter, double frames_per_second, double pass_hz,
                                            double stop_hz, int cluster_max, double cluster_correction,
                                            double adaptive_tolerance, py::object world_from_map, int threads,
-                                           bool fit_irradiance, SunModel sun_model) {
+                                           bool fit_irradiance, SunModel sun_model, Tracking tracking,
+                                           bool filter_brightness) {
     RigOptions o;
     o.map = map_options(mapping, lens, max_width, threads);
     o.lights.count = count;
@@ -46,6 +47,8 @@ std::unique_ptr<PyRigBuilder> make_builder(int count, SamplerKind sampler, bool 
     o.lights.fit_irradiance = fit_irradiance;
     o.lights.sun_model = sun_model;
     o.temporal_filter = temporal_filter;
+    o.tracking = tracking;
+    o.filter_brightness = filter_brightness;
     o.frames_per_second = frames_per_second;
     o.pass_hz = pass_hz;
     o.stop_hz = stop_hz;
@@ -163,7 +166,8 @@ void bind_lights_rig(py::module_& m) {
           py::arg("cluster_correction") = rig.cluster_correction,
           py::arg("adaptive_tolerance") = rig.adaptive_tolerance, py::arg("world_from_map") = py::none(),
           py::arg("threads") = map.threads, py::arg("fit_irradiance") = light.fit_irradiance,
-          py::arg("sun_model") = light.sun_model);
+          py::arg("sun_model") = light.sun_model, py::arg("tracking") = rig.tracking,
+          py::arg("filter_brightness") = rig.filter_brightness);
     bind_frames_in(c);
     bind_results_out(c);
 }

@@ -52,6 +52,8 @@ void bind_settings(py::module_& m) {
         s["visibility.transmission"] = spec(shading.transmission);
         s["lights.count"] = spec(rig.lights.count, lights::LightOptions::count_range);
         s["lights.blue_noise"] = spec(rig.lights.blue_noise);
+        s["lights.fit_irradiance"] = spec(rig.lights.fit_irradiance);
+        s["lights.filter_brightness"] = spec(rig.filter_brightness);
         s["lights.temporal_filter"] = spec(rig.temporal_filter);
         s["lights.cluster_max"] = spec(rig.cluster_max, lights::RigOptions::cluster_max_range);
         s["lights.adaptive_tolerance"] = spec(rig.adaptive_tolerance, lights::RigOptions::adaptive_tolerance_range);

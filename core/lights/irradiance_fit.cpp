@@ -6,10 +6,13 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
+#include <Eigen/Eigenvalues>
 
 #include "common/error.hpp"
 #include "common/parallel.hpp"
+#include "lights/exact_irradiance.hpp"
 #include "lights/sun_irradiance.hpp"
+#include "lights/sun_kernel_table.hpp"
 #include "sh/point_sets.hpp"
 
 namespace penumbra::lights {
@@ -19,59 +22,132 @@ namespace {
 struct Problem {
     std::vector<Eigen::Vector3d> normals;
     Eigen::MatrixXd target;        // M × 3
-    std::vector<double> half;      // sun half-angles
     std::vector<Eigen::Vector3d> start;
     std::vector<double> bound;     // max angle from start
-    SunModel model;
-    int threads;
+    double max_half = 0.0;         // > 0: half-angles are fitted in [0, max_half]
+    bool upper_hemisphere = false; // a hemispherical map's lights stay at z ≥ 0
+    Eigen::MatrixXd prior;         // N × 3 expected colours (empty: none)
+    double ridge = 0.0;            // weight of ‖x − prior‖²
+    Eigen::RowVector3d flux;       // the map's ∫L dω per channel, the colours' sum (keep_flux)
+    double flux_weight = 0.0;      // weight of Σ_c (Σ_k x_kc − flux_c)²; 0: free
+    SunModel model = SunModel::blender4_cone;
+    int threads = 0;
 };
 
-// A(i, k) = K(n_i·d_k, h_k); with slopes, also K'(n_i·d_k, h_k).
-void kernels(const Problem& p, const std::vector<Eigen::Vector3d>& dirs, Eigen::MatrixXd& a, Eigen::MatrixXd* slope) {
-    const Eigen::Index m = Eigen::Index(p.normals.size()), n = Eigen::Index(dirs.size());
+// What the fit moves: each light's direction and its sun's half-angle.
+struct Shape {
+    std::vector<Eigen::Vector3d> dirs;
+    std::vector<double> half;
+};
+
+// A(i, k) = K(n_i·d_k, h_k); with slopes, also ∂K/∂c and ∂K/∂h.
+void kernels(const Problem& p, const Shape& s, Eigen::MatrixXd& a, Eigen::MatrixXd* slope, Eigen::MatrixXd* dh) {
+    const Eigen::Index m = Eigen::Index(p.normals.size()), n = Eigen::Index(s.dirs.size());
+    std::vector<TabulatedSun> suns;
+    suns.reserve(s.dirs.size());
+    for (double h : s.half) suns.emplace_back(h, p.model);
     a.resize(m, n);
     if (slope) slope->resize(m, n);
+    if (dh) dh->resize(m, n);
     parallel_for(std::size_t(m), {p.threads, 64, "lights.irradiance_fit"}, [&](std::size_t b, std::size_t e) {
         for (Eigen::Index i = Eigen::Index(b); i < Eigen::Index(e); ++i)
             for (Eigen::Index k = 0; k < n; ++k) {
-                const double c = p.normals[i].dot(dirs[k]);
-                a(i, k) = sun_kernel(c, p.half[k], p.model);
-                if (slope) (*slope)(i, k) = sun_kernel_slope(c, p.half[k], p.model);
+                const SunKernelValue v = suns[std::size_t(k)](p.normals[i].dot(s.dirs[k]));
+                a(i, k) = v.value;
+                if (slope) (*slope)(i, k) = v.slope;
+                if (dh) (*dh)(i, k) = v.angle_slope;
             }
     });
 }
 
-// min ‖A x − t‖² over x ≥ 0 for each column of t: projected coordinate
-// descent on the normal equations G x = b, warm-started at `x`.
-void nonnegative_colours(const Eigen::MatrixXd& a, const Eigen::MatrixXd& target, Eigen::MatrixXd& x) {
-    Eigen::MatrixXd g = a.transpose() * a;
-    const Eigen::MatrixXd b = a.transpose() * target;
-    // A whisper of ridge keeps coincident lights' 2×2 blocks from stalling.
-    const double ridge = 1e-12 * std::max(g.diagonal().maxCoeff(), 1e-300);
-    g.diagonal().array() += ridge;
+// aᵀb, its column blocks on the worker threads (Eigen's own products run
+// on one).
+Eigen::MatrixXd product_tn(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, int threads) {
+    Eigen::MatrixXd out(a.cols(), b.cols());
+    parallel_for(std::size_t(b.cols()), {threads, 32, "lights.irradiance_fit"}, [&](std::size_t c0, std::size_t c1) {
+        out.middleCols(Eigen::Index(c0), Eigen::Index(c1 - c0)) =
+            a.transpose() * b.middleCols(Eigen::Index(c0), Eigen::Index(c1 - c0));
+    });
+    return out;
+}
+
+// aᵀa: each block of rows of its upper triangle on a worker thread, then mirrored.
+Eigen::MatrixXd gram(const Eigen::MatrixXd& a, int threads) {
+    const Eigen::Index q = a.cols();
+    Eigen::MatrixXd out(q, q);
+    parallel_for(std::size_t(q), {threads, 48, "lights.irradiance_fit"}, [&](std::size_t r0, std::size_t r1) {
+        const Eigen::Index b = Eigen::Index(r0), rows = Eigen::Index(r1 - r0);
+        out.block(b, b, rows, q - b) = a.middleCols(b, rows).transpose() * a.rightCols(q - b);
+    });
+    out.triangularView<Eigen::StrictlyLower>() = out.transpose();
+    return out;
+}
+
+// min ‖A x − t‖² over x ≥ 0 for one channel, on the normal equations
+// G x = b: projected coordinate descent sweeps, each round finished by the
+// exact solve on the lights it left lit (lights on one sun have nearly equal
+// columns, where coordinate descent alone crawls), stepped back to x ≥ 0.
+void nonnegative_channel(const Eigen::MatrixXd& g, const Eigen::VectorXd& b, Eigen::VectorXd& x) {
     const Eigen::Index n = g.rows();
-    for (Eigen::Index c = 0; c < x.cols(); ++c) {
-        Eigen::VectorXd xc = x.col(c).cwiseMax(0.0);
-        Eigen::VectorXd grad = g * xc - b.col(c);
-        const double scale = std::max(b.col(c).cwiseAbs().maxCoeff(), 1e-300);
-        for (int sweep = 0; sweep < 400; ++sweep) {
-            double largest = 0.0;
+    const double scale = std::max(b.cwiseAbs().maxCoeff(), 1e-300);
+    x = x.cwiseMax(0.0);
+    Eigen::VectorXd grad = g * x - b;
+    for (int round = 0; round < 20; ++round) {
+        double largest = 0.0;
+        for (int sweep = 0; sweep < 10; ++sweep) {
+            largest = 0.0;
             for (Eigen::Index k = 0; k < n; ++k) {
-                const double next = std::max(0.0, xc[k] - grad[k] / g(k, k));
-                const double delta = next - xc[k];
+                const double delta = std::max(0.0, x[k] - grad[k] / g(k, k)) - x[k];
                 if (delta == 0.0) continue;
                 grad += delta * g.col(k);
-                xc[k] = next;
+                x[k] += delta;
                 largest = std::max(largest, std::abs(delta) * g(k, k));
             }
-            if (largest < 1e-10 * scale) break;
         }
-        x.col(c) = xc;
+        std::vector<Eigen::Index> lit;
+        for (Eigen::Index k = 0; k < n; ++k)
+            if (x[k] > 0.0) lit.push_back(k);
+        if (lit.empty()) return;
+        const Eigen::Index f = Eigen::Index(lit.size());
+        Eigen::MatrixXd gf(f, f);
+        Eigen::VectorXd bf(f), xf(f);
+        for (Eigen::Index i = 0; i < f; ++i) {
+            for (Eigen::Index j = 0; j < f; ++j) gf(i, j) = g(lit[i], lit[j]);
+            bf[i] = b[lit[i]];
+            xf[i] = x[lit[i]];
+        }
+        const Eigen::VectorXd exact = gf.ldlt().solve(bf);
+        if (!exact.allFinite()) return;
+        // Longest step towards the exact solve that keeps x ≥ 0 (convex: the error drops).
+        double step = 1.0;
+        for (Eigen::Index i = 0; i < f; ++i)
+            if (exact[i] < 0.0) step = std::min(step, xf[i] / (xf[i] - exact[i]));
+        for (Eigen::Index i = 0; i < f; ++i) x[lit[i]] = std::max(0.0, xf[i] + step * (exact[i] - xf[i]));
+        grad = g * x - b;
+        if (step == 1.0 && largest < 1e-10 * scale) return;
     }
 }
 
-double objective(const Eigen::MatrixXd& a, const Eigen::MatrixXd& x, const Eigen::MatrixXd& target) {
-    return (a * x - target).squaredNorm();
+// Every channel's colours for kernel matrix A, warm-started at x, with the
+// prior's ridge when there is one.
+void nonnegative_colours(const Problem& p, const Eigen::MatrixXd& a, Eigen::MatrixXd& x) {
+    Eigen::MatrixXd g = gram(a, p.threads);
+    Eigen::MatrixXd b = a.transpose() * p.target;
+    // A whisper of ridge keeps coincident lights' blocks from being singular.
+    g.diagonal().array() += 1e-12 * std::max(g.diagonal().maxCoeff(), 1e-300);
+    if (p.prior.size()) {
+        g.diagonal().array() += p.ridge;
+        b += p.ridge * p.prior;
+    }
+    if (p.flux_weight > 0.0) {
+        g.array() += p.flux_weight;
+        b.rowwise() += p.flux_weight * p.flux;
+    }
+    for (Eigen::Index c = 0; c < x.cols(); ++c) {
+        Eigen::VectorXd xc = x.col(c);
+        nonnegative_channel(g, b.col(c), xc);
+        x.col(c) = xc;
+    }
 }
 
 void tangent_frame(const Eigen::Vector3d& d, Eigen::Vector3d& u, Eigen::Vector3d& v) {
@@ -94,45 +170,132 @@ Eigen::Vector3d moved(const Eigen::Vector3d& d, double du, double dv, const Eige
     return out;
 }
 
-// One Levenberg–Marquardt step of every direction, colours x fixed. The
-// Gauss–Newton matrix of channel-summed residuals factors as
-// H[(k,α),(l,β)] = (x xᵀ)(k,l) · (gᵀg)[(k,α),(l,β)], g(i,(k,α)) = K'·(n_i·t_kα).
-bool direction_step(const Problem& p, std::vector<Eigen::Vector3d>& dirs, const Eigen::MatrixXd& x, double& mu) {
-    const Eigen::Index m = Eigen::Index(p.normals.size()), n = Eigen::Index(dirs.size());
-    Eigen::MatrixXd a, slope;
-    kernels(p, dirs, a, &slope);
-    const Eigen::MatrixXd residual = a * x - p.target;
-    const double before = residual.squaredNorm();
-    Eigen::MatrixXd g(m, 2 * n);
-    for (Eigen::Index k = 0; k < n; ++k) {
-        Eigen::Vector3d u, v;
-        tangent_frame(dirs[k], u, v);
-        for (Eigen::Index i = 0; i < m; ++i) {
-            g(i, 2 * k) = slope(i, k) * p.normals[i].dot(u);
-            g(i, 2 * k + 1) = slope(i, k) * p.normals[i].dot(v);
+// A trial shape: each direction moved in its tangent plane and held within
+// its bound, each half-angle moved and clamped.
+Shape trial_shape(const Problem& p, const Shape& s, const Eigen::VectorXd& step, int per_light) {
+    Shape out = s;
+    if (!step.allFinite()) return out;
+    for (std::size_t k = 0; k < s.dirs.size(); ++k) {
+        const Eigen::Index o = Eigen::Index(k) * per_light;
+        out.dirs[k] = moved(s.dirs[k], step[o], step[o + 1], p.start[k], p.bound[k]);
+        if (p.upper_hemisphere && out.dirs[k].z() < 0.0) {
+            // Onto the horizon (a light of a hemispherical map is never below it).
+            const Eigen::Vector3d flat(out.dirs[k].x(), out.dirs[k].y(), 0.0);
+            out.dirs[k] = flat.norm() > 1e-12 ? Eigen::Vector3d(flat.normalized()) : s.dirs[k];
+        }
+        // K is nearly flat in h for a narrow sun (1 − O(h²)), where the
+        // Gauss–Newton step can be huge: at most half of h (or of a degree).
+        if (per_light == 3) {
+            const double most = 0.5 * std::max(s.half[k], 0.0175);
+            out.half[k] = std::clamp(s.half[k] + std::clamp(step[o + 2], -most, most), 0.0, p.max_half);
         }
     }
-    Eigen::MatrixXd h = g.transpose() * g;
-    const Eigen::MatrixXd w = x * x.transpose();
-    const Eigen::MatrixXd gr = g.transpose() * residual;  // 2N × 3
-    Eigen::VectorXd grad(2 * n);
+    return out;
+}
+
+// g(i,(k,α)) = ∂K(n_i·d_k, h_k)/∂α: K'·(n_i·t_kα) along the two tangent
+// directions t_kα, and ∂K/∂h for the angle.
+Eigen::MatrixXd shape_jacobian(const Problem& p, const Shape& s, const Eigen::MatrixXd& slope,
+                               const Eigen::MatrixXd& dh, int per_light) {
+    const Eigen::Index m = Eigen::Index(p.normals.size()), n = Eigen::Index(s.dirs.size());
+    Eigen::MatrixXd g(m, per_light * n);
+    for (Eigen::Index k = 0; k < n; ++k) {
+        Eigen::Vector3d u, v;
+        tangent_frame(s.dirs[k], u, v);
+        for (Eigen::Index i = 0; i < m; ++i) {
+            g(i, per_light * k) = slope(i, k) * p.normals[i].dot(u);
+            g(i, per_light * k + 1) = slope(i, k) * p.normals[i].dot(v);
+            if (per_light == 3) g(i, per_light * k + 2) = dh(i, k);
+        }
+    }
+    return g;
+}
+
+// Gauss–Newton matrix of the shape with the colours re-solved (variable
+// projection, Kaufman's form). For fixed colours the residual's Jacobian in
+// channel c is J_c = g·diag(x_c); once the colours follow, only its part
+// outside the span of the lit lights' kernel columns A_U counts:
+//   H = Σ_c diag(x_c) gᵀ(I − P_U) g diag(x_c) = Σ_c (x_c x_cᵀ) ∘ (gᵀg − Cᵀ G⁺ C),
+//   C = A_Uᵀ g, G = A_Uᵀ A_U,
+// U the lights lit in any channel (one dark in a channel is treated as free
+// there too: a slightly smaller H, which the damping absorbs). G⁺ drops
+// eigenvalues below 1e-12 of the largest: lights on one sun have nearly
+// equal columns. `unprojected` gets the diagonal of Σ_c (x_c x_cᵀ) ∘ (gᵀg),
+// the damping's scale.
+Eigen::MatrixXd projected_gauss_newton(const Problem& p, const Eigen::MatrixXd& a, const Eigen::MatrixXd& g,
+                                       const Eigen::MatrixXd& x, int per_light, Eigen::VectorXd& unprojected) {
+    const Eigen::Index n = a.cols(), q = g.cols();
+    Eigen::MatrixXd curvature = gram(g, p.threads);
+    std::vector<Eigen::Index> lit;
     for (Eigen::Index k = 0; k < n; ++k)
-        for (int s = 0; s < 2; ++s) grad[2 * k + s] = gr.row(2 * k + s).dot(x.row(k));
-    for (Eigen::Index r = 0; r < 2 * n; ++r)
-        for (Eigen::Index c = 0; c < 2 * n; ++c) h(r, c) *= w(r / 2, c / 2);
-    const double floor = 1e-12 * std::max(h.diagonal().maxCoeff(), 1e-300);
-    for (int attempt = 0; attempt < 6; ++attempt) {
+        if (x.row(k).maxCoeff() > 0.0) lit.push_back(k);
+    if (!lit.empty()) {
+        Eigen::MatrixXd au(a.rows(), Eigen::Index(lit.size()));
+        for (std::size_t i = 0; i < lit.size(); ++i) au.col(Eigen::Index(i)) = a.col(lit[i]);
+        const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gram(au, p.threads));
+        const Eigen::VectorXd lambda = eig.eigenvalues();
+        const double cut = 1e-12 * std::max(lambda.maxCoeff(), 1e-300);
+        Eigen::VectorXd root(lambda.size());
+        for (Eigen::Index i = 0; i < lambda.size(); ++i) root[i] = lambda[i] > cut ? 1.0 / std::sqrt(lambda[i]) : 0.0;
+        // Cᵀ G⁺ C = WᵀW with W = Λ^{-1/2} Vᵀ C.
+        const Eigen::MatrixXd w = root.asDiagonal() * eig.eigenvectors().transpose() * product_tn(au, g, p.threads);
+        curvature -= gram(w, p.threads);
+    }
+    Eigen::MatrixXd h = Eigen::MatrixXd::Zero(q, q);
+    unprojected = Eigen::VectorXd::Zero(q);
+    const Eigen::VectorXd gg = g.colwise().squaredNorm().transpose();
+    for (Eigen::Index c = 0; c < x.cols(); ++c) {
+        Eigen::VectorXd xs(q);
+        for (Eigen::Index r = 0; r < q; ++r) xs[r] = x(r / per_light, c);
+        h += (xs * xs.transpose()).cwiseProduct(curvature);
+        unprojected += xs.cwiseAbs2().cwiseProduct(gg);
+    }
+    return h;
+}
+
+// Σ_c min over x_c ≥ 0 of ‖A x_c − t_c‖² for a shape; x warm-starts and is updated.
+double objective(const Problem& p, const Eigen::MatrixXd& a, const Eigen::MatrixXd& x) {
+    double f = (a * x - p.target).squaredNorm();
+    if (p.prior.size()) f += p.ridge * (x - p.prior).squaredNorm();
+    if (p.flux_weight > 0.0) f += p.flux_weight * (x.colwise().sum() - p.flux).squaredNorm();
+    return f;
+}
+
+double solved_objective(const Problem& p, const Shape& s, Eigen::MatrixXd& x) {
+    Eigen::MatrixXd a;
+    kernels(p, s, a, nullptr, nullptr);
+    nonnegative_colours(p, a, x);
+    return objective(p, a, x);
+}
+
+// One Levenberg–Marquardt step of every light's shape with the colours
+// re-solved at each trial; `error` is the current squared error, updated.
+// Damping is scaled by the unprojected curvature: the projected one is ~0
+// along moves the colours absorb (lights on one sun), where an undamped
+// step would be unbounded.
+bool shape_step(const Problem& p, Shape& s, Eigen::MatrixXd& x, double& mu, double& error) {
+    const int per_light = p.max_half > 0.0 ? 3 : 2;
+    const Eigen::Index q = per_light * Eigen::Index(s.dirs.size());
+    Eigen::MatrixXd a, slope, dh;
+    kernels(p, s, a, &slope, per_light == 3 ? &dh : nullptr);
+    const Eigen::MatrixXd residual = a * x - p.target;
+    const Eigen::MatrixXd g = shape_jacobian(p, s, slope, dh, per_light);
+    Eigen::VectorXd scale;
+    const Eigen::MatrixXd h = projected_gauss_newton(p, a, g, x, per_light, scale);
+    const Eigen::MatrixXd gr = g.transpose() * residual;  // q × 3
+    Eigen::VectorXd grad(q);
+    for (Eigen::Index r = 0; r < q; ++r) grad[r] = gr.row(r).dot(x.row(r / per_light));
+    const double floor = 1e-12 * std::max(scale.maxCoeff(), 1e-300);
+    for (int attempt = 0; attempt < 8; ++attempt) {
         Eigen::MatrixXd damped = h;
-        damped.diagonal() += (mu * h.diagonal().array() + floor).matrix();
-        const Eigen::VectorXd step = damped.ldlt().solve(-grad);
-        std::vector<Eigen::Vector3d> trial(dirs.size());
-        for (Eigen::Index k = 0; k < n; ++k)
-            trial[k] = step.allFinite() ? moved(dirs[k], step[2 * k], step[2 * k + 1], p.start[k], p.bound[k])
-                                        : dirs[k];
-        Eigen::MatrixXd at;
-        kernels(p, trial, at, nullptr);
-        if (objective(at, x, p.target) < before) {
-            dirs = std::move(trial);
+        damped.diagonal() += (mu * scale.array() + floor).matrix();
+        const Shape trial = trial_shape(p, s, damped.ldlt().solve(-grad), per_light);
+        Eigen::MatrixXd xt = x;
+        const double after = solved_objective(p, trial, xt);
+        if (after < error) {
+            s = trial;
+            x = xt;
+            error = after;
             mu = std::max(mu / 3.0, 1e-9);
             return true;
         }
@@ -141,80 +304,135 @@ bool direction_step(const Problem& p, std::vector<Eigen::Vector3d>& dirs, const 
     return false;
 }
 
-double luminance_error(const Eigen::MatrixXd& estimate, const Eigen::MatrixXd& target,
-                       const std::array<double, 3>& y) {
-    return relative_rmse(estimate, target, y);
+void check_options(const IrradianceFitOptions& options, std::size_t lights) {
+    if (options.normal_count != 0 && options.normal_count < 16)
+        throw ArgumentError("the irradiance fit needs at least 16 normals (0: automatic)");
+    if (options.reference_width < 0) throw ArgumentError("reference_width must be >= 0 (0: the full map)");
+    if (options.iterations < 0) throw ArgumentError("the irradiance fit's iterations must be >= 0");
+    if (!(options.tolerance >= 0.0)) throw ArgumentError("the irradiance fit's tolerance must be >= 0");
+    if (!(options.reach >= 0.0)) throw ArgumentError("the irradiance fit's reach must be >= 0");
+    if (!options.move_bound.empty() && options.move_bound.size() != lights)
+        throw ArgumentError("move_bound needs one angle per light");
+    if (!options.prior_rgb.empty() && options.prior_rgb.size() != lights)
+        throw ArgumentError("prior_rgb needs one colour per light");
+    if (!(options.prior_weight >= 0.0)) throw ArgumentError("the prior's weight must be >= 0");
+    for (double b : options.move_bound)
+        if (!(b >= 0.0)) throw ArgumentError("every move_bound must be >= 0");
+}
+
+// The target: the exact irradiance of the map (or of an energy-exact
+// reduced copy) on the fitting normals.
+Eigen::MatrixXd target_irradiance(const EnvironmentMap& map, const std::vector<Eigen::Vector3d>& normals,
+                                  const IrradianceFitOptions& options) {
+    if (options.reference_width == 0 || map.width <= options.reference_width)
+        return IrradianceReference(map).evaluate(normals, options.threads);
+    MapOptions reduce;
+    reduce.projection = map.full_sphere ? Projection::equirectangular : Projection::hemisphere_polar;
+    reduce.max_width = options.reference_width;
+    reduce.threads = options.threads;
+    Image copy(map.width, map.height, 3);
+    copy.pixels = map.rgb;
+    return IrradianceReference(make_environment(copy, reduce)).evaluate(normals, options.threads);
 }
 
 }  // namespace
 
 double fit_reach(const EnvironmentMap& map, const Light& light, double reach) {
+    if (std::isinf(reach)) return reach;
     const double row_angle = map.theta_max() / std::max(1, map.height);
     return reach * std::max(light.spread, row_angle);
 }
 
-IrradianceFitResult fit_irradiance(const EnvironmentMap& map, std::vector<Light>& lights,
-                                   const IrradianceFitOptions& options) {
-    if (options.normal_count < 16) throw ArgumentError("the irradiance fit needs at least 16 normals");
-    if (options.reference_width < 0) throw ArgumentError("reference_width must be >= 0 (0: the full map)");
-    if (options.iterations < 0) throw ArgumentError("the irradiance fit's iterations must be >= 0");
-    if (!(options.reach >= 0.0) || !std::isfinite(options.reach))
-        throw ArgumentError("the irradiance fit's reach must be a finite number >= 0");
-    IrradianceFitResult result;
-    if (lights.empty() || map.width == 0) return result;
+namespace {
 
-    // Target: the exact irradiance of an energy-exact reduced copy.
+// The problem and the starting shape and colours of `lights`.
+Problem make_problem(const EnvironmentMap& map, const std::vector<Light>& lights, const IrradianceFitOptions& options,
+                     Shape& shape, Eigen::MatrixXd& x) {
     Problem p;
     p.model = options.sun_model;
     p.threads = options.threads;
-    p.normals = sh::fibonacci_sphere(options.normal_count).directions;
-    const EnvironmentMap* reference = &map;
-    EnvironmentMap small;
-    if (options.reference_width > 0 && map.width > options.reference_width) {
-        MapOptions reduce;
-        reduce.projection = map.full_sphere ? Projection::equirectangular : Projection::hemisphere_polar;
-        reduce.max_width = options.reference_width;
-        reduce.threads = options.threads;
-        Image copy(map.width, map.height, 3);
-        copy.pixels = map.rgb;
-        small = make_environment(copy, reduce);
-        reference = &small;
+    p.upper_hemisphere = !map.full_sphere;
+    // Six normals per light (18 residuals for its 6 unknowns), at least 642.
+    const int normals = options.normal_count > 0 ? options.normal_count
+                                                 : std::clamp(6 * int(lights.size()), 642, 2562);
+    p.normals = sh::fibonacci_sphere(normals).directions;
+    p.target = target_irradiance(map, p.normals, options);
+    const double widest = p.model == SunModel::blender3_disc ? max_disc_half_angle : 0.5 * std::numbers::pi;
+    p.max_half = options.fit_angles && p.model != SunModel::point ? widest : 0.0;
+    const Eigen::Index n = Eigen::Index(lights.size());
+    x.resize(n, 3);
+    for (Eigen::Index k = 0; k < n; ++k) {
+        const Light& l = lights[std::size_t(k)];
+        shape.dirs.push_back(l.direction);
+        const double h = sun_half_angle(l.spread);
+        shape.half.push_back(options.fit_angles ? std::min(h, widest) : h);
+        x.row(k) = l.rgb.cwiseMax(0.0).transpose();
+        p.start.push_back(l.direction);
+        p.bound.push_back(options.move_bound.empty() ? fit_reach(map, l, options.reach)
+                                                     : options.move_bound[std::size_t(k)]);
     }
-    p.target = exact_irradiance(*reference, p.normals, options.threads);
+    if (!options.prior_rgb.empty() && options.prior_weight > 0.0) {
+        Eigen::MatrixXd a;
+        kernels(p, shape, a, nullptr, nullptr);
+        p.prior.resize(n, 3);
+        for (Eigen::Index k = 0; k < n; ++k) p.prior.row(k) = options.prior_rgb[std::size_t(k)].transpose();
+        p.ridge = options.prior_weight * a.colwise().squaredNorm().mean();
+    }
+    return p;
+}
+
+// The colours once more for the final shape, their sum held to the map's
+// ∫L dω by a penalty strong enough that it is off by ~1e-8 (rank one on the
+// normal equations: with G ≈ diagonal the sum's error shrinks by
+// 1 + w·N/mean G_kk), then rescaled to it exactly.
+void hold_the_flux(const EnvironmentMap& map, const Shape& shape, Problem& p, Eigen::MatrixXd& x) {
+    Eigen::MatrixXd a;
+    kernels(p, shape, a, nullptr, nullptr);
+    p.flux = integral_rgb(map).transpose();
+    p.flux_weight = 1e4 * a.colwise().squaredNorm().mean() / double(x.rows());
+    nonnegative_colours(p, a, x);
+    for (int c = 0; c < 3; ++c) {
+        const double sum = x.col(c).sum();
+        if (sum > 0.0) x.col(c) *= p.flux[c] / sum;
+    }
+}
+
+}  // namespace
+
+IrradianceFitResult fit_irradiance(const EnvironmentMap& map, std::vector<Light>& lights,
+                                   const IrradianceFitOptions& options) {
+    check_options(options, lights.size());
+    IrradianceFitResult result;
+    if (lights.empty() || map.width == 0) return result;
+    Shape shape;
+    Eigen::MatrixXd x;
+    Problem p = make_problem(map, lights, options, shape, x);
     if (!(p.target.cwiseAbs().maxCoeff() > 0.0)) {
         for (Light& l : lights) l.rgb.setZero(), l.power = 0.0;
         return result;
     }
-
-    const Eigen::Index n = Eigen::Index(lights.size());
-    std::vector<Eigen::Vector3d> dirs(lights.size());
-    Eigen::MatrixXd x(n, 3);
-    for (Eigen::Index k = 0; k < n; ++k) {
-        const Light& l = lights[k];
-        dirs[k] = l.direction;
-        x.row(k) = l.rgb.cwiseMax(0.0).transpose();
-        p.half.push_back(sun_half_angle(l.spread));
-        p.start.push_back(l.direction);
-        p.bound.push_back(fit_reach(map, l, options.reach));
-    }
     Eigen::MatrixXd a;
-    kernels(p, dirs, a, nullptr);
-    result.error_before = luminance_error(a * x, p.target, options.luminance);
+    kernels(p, shape, a, nullptr, nullptr);
+    result.error_before = relative_rmse(a * x, p.target, options.luminance);
 
-    // Alternate: colours for these directions, then a step of the directions.
-    double mu = 1e-3;
-    nonnegative_colours(a, p.target, x);
+    double mu = 0.1;
+    double error = solved_objective(p, shape, x);
     for (int it = 0; it < options.iterations; ++it) {
-        if (!direction_step(p, dirs, x, mu)) break;
-        kernels(p, dirs, a, nullptr);
-        nonnegative_colours(a, p.target, x);
+        const double before = error;
+        if (!shape_step(p, shape, x, mu, error)) break;
+        ++result.steps;
+        if (before - error < options.tolerance * before) break;
     }
-    result.error_after = luminance_error(a * x, p.target, options.luminance);
+    if (options.keep_flux) hold_the_flux(map, shape, p, x);
+    kernels(p, shape, a, nullptr, nullptr);
+    result.error_after = relative_rmse(a * x, p.target, options.luminance);
 
-    for (Eigen::Index k = 0; k < n; ++k) {
+    for (std::size_t k = 0; k < lights.size(); ++k) {
         Light& l = lights[k];
-        l.direction = dirs[k];
-        l.rgb = x.row(k).transpose();
+        l.direction = shape.dirs[k];
+        // The add-on draws a sun of half-angle √2·spread (sun_half_angle).
+        if (p.max_half > 0.0) l.spread = shape.half[k] / std::numbers::sqrt2;
+        l.rgb = x.row(Eigen::Index(k)).transpose();
         l.power = options.luminance[0] * l.rgb[0] + options.luminance[1] * l.rgb[1] + options.luminance[2] * l.rgb[2];
     }
     return result;

@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 
 #include "common/error.hpp"
+#include "lights/exact_irradiance.hpp"
 #include "lights/region_assignment.hpp"
 #include "lights/region_kernels.hpp"
 #include "lights/irradiance_fit.hpp"
@@ -257,13 +258,33 @@ FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistributio
         equal_power(map, dist, samples, options, out);
     else
         region_power(map, dist, samples, options, out);
-    if (options.fit_irradiance) {
+    if (options.fit_irradiance && options.count <= LightOptions::max_fitted_lights) {
         IrradianceFitOptions fit;
         fit.sun_model = options.sun_model;
         fit.luminance = options.luminance;
         fit.threads = options.threads;
         fit_irradiance(map, out.lights, fit);
     }
+    return out;
+}
+
+FrameLights region_lights(const EnvironmentMap& map, const LuminanceDistribution& dist,
+                          const std::vector<Eigen::Vector3d>& seeds, const LightOptions& options) {
+    if (seeds.empty()) throw ArgumentError("region lights need at least one seed direction");
+    FrameLights out;
+    out.total_rgb = integral_rgb(map);
+    out.total_power = luma(options.luminance, out.total_rgb);
+    std::vector<Sample> samples(seeds.size());
+    out.lights.resize(seeds.size());
+    for (std::size_t k = 0; k < seeds.size(); ++k) {
+        samples[k].direction = seeds[k].normalized();
+        out.lights[k].index = int(k);
+        out.lights[k].sample_direction = samples[k].direction;
+        out.lights[k].direction = samples[k].direction;
+    }
+    LightOptions o = options;
+    o.count = int(seeds.size());
+    region_power(map, dist, samples, o, out);
     return out;
 }
 
@@ -287,34 +308,7 @@ Eigen::MatrixXd irradiance(const std::vector<Light>& lights, const std::vector<E
 }
 
 Eigen::MatrixXd exact_irradiance(const EnvironmentMap& map, const std::vector<Eigen::Vector3d>& normals, int threads) {
-    // Cell directions and L·Ω once, then a dense sweep per normal.
-    const std::size_t cells = std::size_t(map.width) * map.height;
-    std::vector<Eigen::Vector3d> dir;
-    std::vector<Eigen::Vector3d> flux;
-    dir.reserve(cells);
-    flux.reserve(cells);
-    for (int r = 0; r < map.height; ++r) {
-        const double omega = map.solid_angle(r);
-        for (int c = 0; c < map.width; ++c) {
-            const float* p = map.pixel(r, c);
-            if (p[0] <= 0.0f && p[1] <= 0.0f && p[2] <= 0.0f) continue;
-            dir.push_back(map.direction(r, c));
-            flux.push_back(omega * Eigen::Vector3d(p[0], p[1], p[2]));
-        }
-    }
-    Eigen::MatrixXd e = Eigen::MatrixXd::Zero(Eigen::Index(normals.size()), 3);
-    parallel_for(normals.size(), {threads, 8, "lights.exact_irradiance"}, [&](std::size_t b, std::size_t end) {
-        for (Eigen::Index i = Eigen::Index(b); i < Eigen::Index(end); ++i) {
-            Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-            const Eigen::Vector3d n = normals[i];
-            for (std::size_t k = 0; k < dir.size(); ++k) {
-                const double c = n.dot(dir[k]);
-                if (c > 0.0) sum += c * flux[k];
-            }
-            e.row(i) = sum.transpose();
-        }
-    });
-    return e;
+    return IrradianceReference(map).evaluate(normals, threads);
 }
 
 double relative_rmse(const Eigen::MatrixXd& estimate, const Eigen::MatrixXd& reference,
@@ -355,6 +349,7 @@ AdaptiveResult adaptive_count(const EnvironmentMap& map, const LightOptions& opt
     auto error_of = [&](int count) {
         LightOptions o = options;
         o.count = count;
+        o.fit_irradiance = false;  // the search measures region lights; the caller fits the count it picks
         return relative_rmse(irradiance(compute_lights(map, dist, *sampler, o).lights, normals), reference,
                              options.luminance);
     };

@@ -54,10 +54,13 @@ struct LightOptions {
     // the benchmark draws a fresh shift per frame to measure untracked,
     // resampled-every-frame lights.
     Eigen::Vector2d point_shift = Eigen::Vector2d::Zero();
-    // After the powers: refit every light's rgb (never negative) and move its
-    // direction within its region so the suns' irradiance, under `sun_model`,
-    // matches the map's (irradiance_fit.hpp).
-    bool fit_irradiance = false;
+    // After the powers: refit every light's rgb (never negative, summing to
+    // the map's ∫L dω), direction and sun angle so the suns' irradiance,
+    // under `sun_model`, matches the map's (irradiance_fit.hpp). Only up to
+    // `max_fitted_lights`: the fit's cost grows as N³ (60 s at 512 lights),
+    // and region lights are already as accurate as median cut there.
+    bool fit_irradiance = true;
+    static constexpr int max_fitted_lights = 256;
     SunModel sun_model = SunModel::blender4_cone;
 };
 
@@ -81,6 +84,13 @@ struct FrameLights {
 FrameLights compute_lights(const EnvironmentMap& map, const LuminanceDistribution& distribution,
                            const Sampler& sampler, const LightOptions& options);
 
+// Region lights anchored at given seeds instead of the sampler's points
+// (the video tracker's, tracking.hpp): light k stands for the cells nearer
+// to seeds[k] than to any other seed; its sample_direction is seeds[k].
+// No irradiance fit (the caller's).
+FrameLights region_lights(const EnvironmentMap& map, const LuminanceDistribution& distribution,
+                          const std::vector<Eigen::Vector3d>& seeds, const LightOptions& options);
+
 // Convenience: distribution + sampler + lights.
 FrameLights compute_lights(const EnvironmentMap& map, const LightOptions& options);
 
@@ -88,7 +98,8 @@ FrameLights compute_lights(const EnvironmentMap& map, const LightOptions& option
 Eigen::MatrixXd irradiance(const std::vector<Light>& lights, const std::vector<Eigen::Vector3d>& normals);
 
 // The map's own irradiance Σ_cells L Ω max(0, n·ω) (cell-centre rule), the
-// reference every error is measured against. Parallel over normals.
+// reference every error is measured against: exact, summed by tiles
+// (exact_irradiance.hpp). Parallel over normals.
 Eigen::MatrixXd exact_irradiance(const EnvironmentMap& map, const std::vector<Eigen::Vector3d>& normals,
                                  int threads = 0);
 

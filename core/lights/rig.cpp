@@ -41,7 +41,11 @@ void RigBuilder::add_map(EnvironmentMap map) {
     const PixelDefects defects = map.defects;
     FrameLights lights;
     double error = -1.0;
-    if (options_.adaptive_tolerance > 0.0) {
+    bool cut = raw_.empty();
+    if (following()) {
+        if (!tracker_) tracker_.emplace(options_.lights, options_.track);
+        lights = tracker_->next(map, cut);
+    } else if (options_.adaptive_tolerance > 0.0) {
         const AdaptiveResult a = adaptive_count(map, options_.lights, options_.adaptive_tolerance, options_.lights.count);
         LightOptions o = options_.lights;
         o.count = a.count;
@@ -51,9 +55,15 @@ void RigBuilder::add_map(EnvironmentMap map) {
         lights = compute_lights(map, options_.lights);
     }
     raw_.push_back(std::move(lights));
+    cuts_.push_back(cut);
     defects_.push_back(defects);
     errors_.push_back(error);
     last_map_ = std::move(map);
+}
+
+bool RigBuilder::following() const {
+    return options_.tracking == Tracking::follow && options_.lights.power == PowerMode::region &&
+           options_.adaptive_tolerance <= 0.0;
 }
 
 LightRig RigBuilder::finish(double source_fps) const {
@@ -69,7 +79,15 @@ LightRig RigBuilder::finish(double source_fps) const {
 
     if (options_.temporal_filter && frames.size() > 1) {
         rig.filter = filter_for_rate(rig.frames_per_second, options_.pass_hz, options_.stop_hz);
-        filter_lights(frames, rig.filter);  // absent lights count as power 0 (temporal.hpp)
+        // Shot by shot: light k of one shot has nothing to do with light k of the next.
+        for (std::size_t begin = 0; begin < frames.size();) {
+            std::size_t end = begin + 1;
+            while (end < frames.size() && !cuts_[end]) ++end;
+            std::vector<FrameLights> shot(frames.begin() + long(begin), frames.begin() + long(end));
+            filter_lights(shot, rig.filter, options_.filter_brightness);  // absent lights count as power 0
+            std::move(shot.begin(), shot.end(), frames.begin() + long(begin));
+            begin = end;
+        }
     }
     // Pad every frame to `slots` with power-0 lights that keep the direction
     // of the nearest frame where they exist, so a keyframed sun never jumps.

@@ -4,8 +4,10 @@
 //
 //   per frame:  radiance → EnvironmentMap → luminance PDF → sampler → lights
 //               (fixed count, or adaptive up to the count as a budget)
-//   finish():   FIR filter per light index (temporal.hpp) → clustering per
-//               frame (clustering.hpp) → world_from_map · direction
+//               (or carried over from the previous frame: tracking.hpp)
+//   finish():   FIR filter per light index within each shot (temporal.hpp)
+//               → clustering per frame (clustering.hpp) → world_from_map ·
+//               direction
 //
 // Every frame of the result has `slots` lights, slot k = light index k (a
 // Blender sun per slot): a light absent in a frame (above that frame's
@@ -14,6 +16,7 @@
 // jumps. Per-frame defect counts (NaN, Inf, negative pixels) are kept.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,13 +31,20 @@
 #include "lights/lights.hpp"
 #include "lights/map_reader.hpp"
 #include "lights/temporal.hpp"
+#include "lights/tracking.hpp"
 
 namespace penumbra::lights {
 
 struct RigOptions {
     MapOptions map;
     LightOptions lights;            // lights.count is the count, or the budget when adaptive
+    // How lights carry over from frame to frame (tracking.hpp). FOLLOW needs
+    // region powers and a fixed count; equal powers and the adaptive count
+    // always resample.
+    Tracking tracking = Tracking::follow;
+    TrackingOptions track;
     bool temporal_filter = true;
+    bool filter_brightness = false; // also low-pass each frame's total (the paper's; temporal.hpp)
     double frames_per_second = 0.0; // 0: the source's rate, else 21 (the paper's)
     double pass_hz = paper_pass_hz, stop_hz = paper_stop_hz;  // temporal.hpp: the paper's filter's edges
     int cluster_max = 0;            // Q; 0 = no clustering
@@ -81,7 +91,10 @@ public:
 
 private:
     RigOptions options_;
+    bool following() const;
     std::vector<FrameLights> raw_;
+    std::vector<bool> cuts_;         // frame t starts a shot (the filter does not blend across)
+    std::optional<LightTracker> tracker_;
     std::vector<PixelDefects> defects_;
     std::vector<double> errors_;
     EnvironmentMap last_map_;

@@ -165,28 +165,44 @@ FirFilter filter_for_rate(double rate, double pass, double stop) {
     return design_lowpass(rate, pass, stop);
 }
 
+std::vector<double> FirFilter::window(int t, int n) const {
+    // The widest centred window that stays inside [0, n) whose taps still sum
+    // to at least half (a window cut between the paper's negative taps sums
+    // to 0.86), renormalized.
+    for (int half = std::min({delay(), t, n - 1 - t}); half > 0; --half) {
+        double sum = 0.0;
+        for (int j = -half; j <= half; ++j) sum += taps[std::size_t(delay() + j)];
+        if (sum < 0.5) continue;
+        std::vector<double> w(std::size_t(2 * half + 1));
+        for (int j = -half; j <= half; ++j) w[std::size_t(j + half)] = taps[std::size_t(delay() + j)] / sum;
+        return w;
+    }
+    return {1.0};
+}
+
 std::vector<double> filter_sequence(const std::vector<double>& x, const FirFilter& filter) {
-    const int n = int(x.size()), d = filter.delay();
+    const int n = int(x.size());
     std::vector<double> y(n, 0.0);
     for (int t = 0; t < n; ++t) {
-        double s = 0.0;
-        for (int j = 0; j < int(filter.taps.size()); ++j) s += filter.taps[j] * x[std::clamp(t + j - d, 0, n - 1)];
-        y[t] = s;
+        const std::vector<double> w = filter.window(t, n);
+        const int half = int(w.size() / 2);
+        for (int j = -half; j <= half; ++j) y[t] += w[std::size_t(j + half)] * x[t + j];
     }
     return y;
 }
 
-void filter_lights(std::vector<FrameLights>& frames, const FirFilter& filter) {
+void filter_lights(std::vector<FrameLights>& frames, const FirFilter& filter, bool filter_brightness) {
     const int n = int(frames.size());
     if (n == 0 || filter.taps.size() <= 1) return;
     std::size_t slots = 0;
     for (const auto& f : frames) slots = std::max(slots, f.lights.size());
-    const int d = filter.delay();
 
-    // Filtered frame totals (luminance and RGB).
-    std::vector<double> total(n);
-    for (int t = 0; t < n; ++t) total[t] = frames[t].total_power;
-    const std::vector<double> total_f = filter_sequence(total, filter);
+    // Each frame's own total (the lights' summed luminance), and filtered.
+    const Eigen::Vector3d w(rec709_luminance[0], rec709_luminance[1], rec709_luminance[2]);
+    std::vector<double> total(n, 0.0);
+    for (int t = 0; t < n; ++t)
+        for (const Light& l : frames[t].lights) total[t] += w.dot(l.rgb);
+    const std::vector<double> total_f = filter_brightness ? filter_sequence(total, filter) : total;
 
     std::vector<std::vector<Light>> out(n);
     for (int t = 0; t < n; ++t) out[t] = frames[t].lights;
@@ -212,11 +228,12 @@ void filter_lights(std::vector<FrameLights>& frames, const FirFilter& filter) {
             if (k >= out[t].size()) continue;
             Eigen::Vector3d v = Eigen::Vector3d::Zero(), c = Eigen::Vector3d::Zero();
             double s = 0.0;
-            for (int j = 0; j < int(filter.taps.size()); ++j) {
-                const int u = std::clamp(t + j - d, 0, n - 1);
-                v += filter.taps[j] * dir[u];
-                c += filter.taps[j] * rgb[u];
-                s += filter.taps[j] * spread[u];
+            const std::vector<double> w = filter.window(t, n);
+            const int half = int(w.size() / 2);
+            for (int j = -half; j <= half; ++j) {
+                v += w[std::size_t(j + half)] * dir[t + j];
+                c += w[std::size_t(j + half)] * rgb[t + j];
+                s += w[std::size_t(j + half)] * spread[t + j];
             }
             Light& l = out[t][k];
             if (v.norm() > 1e-6) l.direction = v.normalized();
@@ -224,10 +241,9 @@ void filter_lights(std::vector<FrameLights>& frames, const FirFilter& filter) {
             l.spread = std::max(0.0, s);
         }
     }
-    // Restore each frame's sum to the filtered total (only clamping moves it).
+    // Each frame's sum back to its own total, or to the filtered one.
     for (int t = 0; t < n; ++t) {
         double sum = 0.0;
-        Eigen::Vector3d w(rec709_luminance[0], rec709_luminance[1], rec709_luminance[2]);
         for (auto& l : out[t]) {
             l.power = w.dot(l.rgb);
             sum += l.power;
@@ -241,9 +257,12 @@ void filter_lights(std::vector<FrameLights>& frames, const FirFilter& filter) {
             }
         }
         frames[t].total_rgb = Eigen::Vector3d::Zero();
-        for (const auto& l : out[t]) frames[t].total_rgb += l.rgb;
+        frames[t].total_power = 0.0;
+        for (const auto& l : out[t]) {
+            frames[t].total_rgb += l.rgb;
+            frames[t].total_power += l.power;
+        }
         frames[t].lights = std::move(out[t]);
-        frames[t].total_power = target;
     }
 }
 

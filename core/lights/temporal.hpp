@@ -23,18 +23,28 @@
 // (2D+1)-tap filter delays the lights by D frames (4 for the paper's). A
 // light rig is built offline from the whole video, so filter_sequence applies
 // the same taps centred on each frame: zero delay, and, the taps being
-// symmetric, zero phase. Frames before the first and after the last are taken
-// equal to the first and last frame (edge replication), so a constant signal
-// stays constant right up to the ends and nothing is extrapolated.
+// symmetric, zero phase. Within D frames of the first or last frame (of a
+// shot: the rig filters each shot apart, rig.hpp) the window shrinks to the
+// widest centred one that fits, renormalized (down to the frame alone at the
+// ends): still symmetric, so a light moving steadily stays where it is (a
+// window padded with copies of the end frame would pull it back by a
+// fraction of its motion, which for a sun turning 1° per frame cost up to
+// 2.1× median cut's irradiance error; measured in lights-benchmark.md), at
+// the price of less smoothing near the ends.
 //
-// Energy. The taps sum to 1, so the filtered total power of a frame is the
-// weighted mean of its neighbours' totals; every light's RGB power is filtered
-// with the same taps, and by linearity the lights' sum is the filtered total.
-// Negative taps can push a light that switches on to slightly negative power:
-// such values are set to 0 and the frame's lights are rescaled so their sum
-// is still the filtered total. Directions are filtered as vectors and
-// renormalized (a vector that cancels to near zero keeps the frame's own
-// direction), which changes no power.
+// Energy. The taps sum to 1; every light's RGB power is filtered with the
+// same taps, so by linearity the lights' sum is the filtered sum. Negative
+// taps can push a light that switches on to slightly negative power: such
+// values are set to 0. Then each frame's lights are rescaled to a total: by
+// default the frame's own (the unfiltered lights' sum), so the filter moves
+// power between lights but never changes how bright a frame is — a rig then
+// follows exposure changes and flicker of the source as they are, frame by
+// frame (issue #14 goal 2: each frame as accurate as that frame allows);
+// with `filter_brightness` the filtered sum, the paper's: the total is low-
+// passed too, which removes a lamp's aliased flicker but also the frame's
+// own brightness. Directions are filtered as vectors and renormalized (a
+// vector that cancels to near zero keeps the frame's own direction), which
+// changes no power.
 #pragma once
 
 #include <vector>
@@ -48,6 +58,8 @@ struct FirFilter {
     int delay() const { return int(taps.size() / 2); }  // frames, when used causally
     // |H(f)| at frequency f (Hz) for sampling rate `rate` (Hz).
     double gain(double frequency, double rate) const;
+    // The taps used at frame t of n (see "Delay and ends" above).
+    std::vector<double> window(int t, int n) const;
 };
 
 // The paper's filter, normalized.
@@ -69,10 +81,11 @@ FirFilter filter_for_rate(double rate_hz, double pass_hz = paper_pass_hz, double
 std::vector<double> filter_sequence(const std::vector<double>& signal, const FirFilter& filter);
 
 // Filters frames[t].lights[k] across t for each light index k: direction
-// vectors (renormalized), RGB power, spread; then restores each frame's
-// power sum to the filtered total. Lights are matched by `index`; a light
-// missing from a frame (adaptive count) counts as power 0 there, with the
-// direction of its sample in that frame if present, else its nearest frame's.
-void filter_lights(std::vector<FrameLights>& frames, const FirFilter& filter);
+// vectors (renormalized), RGB power, spread; then rescales each frame's
+// lights to its own total (filter_brightness: to the filtered total). Lights
+// are matched by `index`; a light missing from a frame (adaptive count)
+// counts as power 0 there, with the direction of its nearest frame's. The
+// frames' total_rgb and total_power become their lights' sums.
+void filter_lights(std::vector<FrameLights>& frames, const FirFilter& filter, bool filter_brightness = false);
 
 }  // namespace penumbra::lights

@@ -21,7 +21,7 @@ from ..errors import CORE_ERRORS, describe
 
 PREVIEW_NAME = "Penumbra Light Rig Preview"
 _SETTING_NAMES = ("filepath", "mapping", "colorspace", "count", "sampler", "power", "blue_noise", "fit_irradiance",
-                  "temporal_filter", "cluster_max", "adaptive_tolerance", "frame_start", "frame_end",
+                  "tracking", "temporal_filter", "filter_brightness", "cluster_max", "adaptive_tolerance", "frame_start", "frame_end",
                   "limit_shadows", "json_path")
 # The builds running modally from the UI: the header text shows each one's
 # frames, and so can a script or a test between two timer ticks.
@@ -124,7 +124,7 @@ class _Job:
             count=op.count, sampler=op.sampler, blue_noise=op.blue_noise, power=op.power, mapping=self.mapping,
             temporal_filter=op.temporal_filter, frames_per_second=self.fps, cluster_max=op.cluster_max,
             adaptive_tolerance=op.adaptive_tolerance, world_from_map=self.world_from_map,
-            fit_irradiance=op.fit_irradiance,
+            fit_irradiance=op.fit_irradiance, tracking=op.tracking, filter_brightness=op.filter_brightness,
             sun_model="BLENDER4_CONE" if rig_objects.cone_uniform_suns() else "BLENDER3_DISC")
         self.done = 0
 
@@ -269,8 +269,10 @@ class PENUMBRA_OT_build_light_rig(bpy.types.Operator):
     sampler: bpy.props.EnumProperty(name="Sampler", items=settings.SAMPLER_ITEMS, default="HAVRAN")
     power: bpy.props.EnumProperty(name="Power", items=settings.POWER_ITEMS, default="REGION")
     blue_noise: bpy.props.BoolProperty(name="Blue Noise", **limits("lights.blue_noise"))
-    fit_irradiance: bpy.props.BoolProperty(name="Fit Irradiance", default=False)
+    fit_irradiance: bpy.props.BoolProperty(name="Fit Irradiance", **limits("lights.fit_irradiance"))
+    tracking: bpy.props.EnumProperty(name="Tracking", items=settings.TRACKING_ITEMS, default="FOLLOW")
     temporal_filter: bpy.props.BoolProperty(name="Temporal Filter", **limits("lights.temporal_filter"))
+    filter_brightness: bpy.props.BoolProperty(name="Filter Brightness", **limits("lights.filter_brightness"))
     cluster_max: bpy.props.IntProperty(name="Cluster Max", **limits("lights.cluster_max"))
     adaptive_tolerance: bpy.props.FloatProperty(name="Adaptive Tolerance", **limits("lights.adaptive_tolerance"))
     frame_start: bpy.props.IntProperty(name="Start", default=1)

@@ -65,7 +65,10 @@ class PENUMBRA_PT_light_rig_sampling(_SubPanel, bpy.types.Panel):
         layout.prop(s, "power")
         layout.prop(s, "blue_noise")
         layout.prop(s, "fit_irradiance")
-        layout.column(heading="Temporal").prop(s, "temporal_filter", text="Filter")
+        layout.prop(s, "tracking")
+        temporal = layout.column(heading="Temporal")
+        temporal.prop(s, "temporal_filter", text="Filter")
+        temporal.prop(s, "filter_brightness", text="Brightness")
         layout.prop(s, "cluster_max", text="Clusters")
         layout.prop(s, "adaptive_tolerance", text="Tolerance")
 

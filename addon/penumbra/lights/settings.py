@@ -16,6 +16,12 @@ SAMPLER_ITEMS = (
     ("HAVRAN", "Havran", "Continuous, bijective hemisphere mapping (smooth light motion)"),
     ("STANDARD", "Standard", "Marginal/conditional inversion of the image (may jump between rows and at the seam)"),
 )
+TRACKING_ITEMS = (
+    ("FOLLOW", "Follow", "Each light carries over from the previous frame, turned with the map's own motion and "
+                         "refitted, so identities stay and lights do not jump (a new shot starts afresh)"),
+    ("RESAMPLE", "Resample", "The paper's: every frame sampled anew, light k from the same point (lights wander "
+                             "when the map turns)"),
+)
 POWER_ITEMS = (
     ("REGION", "Region", "Each light carries the power and colour of its region of the map, at its energy centroid"),
     ("EQUAL", "Equal", "The paper's: every light gets the same power"),
@@ -38,11 +44,16 @@ class LightRigSceneSettings(bpy.types.PropertyGroup):
     blue_noise: bpy.props.BoolProperty(name="Blue Noise", **limits("lights.blue_noise"),
                                        description="Start from Lloyd-relaxed Halton points")
     fit_irradiance: bpy.props.BoolProperty(
-        name="Fit Irradiance", default=False,
-        description="Refit each sun's colour and nudge its direction within its region so the suns, as this "
-                    "Blender draws them, light a diffuse surface as the map does (slower per frame)")
+        name="Fit Irradiance", **limits("lights.fit_irradiance"),
+        description="Refit each sun's colour, direction and angle so the suns, as this Blender draws them, light a "
+                    "diffuse surface as the map does (up to 256 lights; slower per frame)")
+    tracking: bpy.props.EnumProperty(name="Tracking", items=TRACKING_ITEMS, default="FOLLOW")
     temporal_filter: bpy.props.BoolProperty(name="Temporal Filter", **limits("lights.temporal_filter"),
                                             description="Low-pass each light's direction and power over time")
+    filter_brightness: bpy.props.BoolProperty(
+        name="Filter Brightness", **limits("lights.filter_brightness"),
+        description="Also low-pass each frame's total brightness (removes a lamp's flicker, and the source's own "
+                    "exposure changes); off: every frame is as bright as its map")
     cluster_max: bpy.props.IntProperty(name="Cluster Max", **limits("lights.cluster_max"),
                                        description="Merge nearby lights into at most this many (0: off)")
     adaptive_tolerance: bpy.props.FloatProperty(

@@ -148,17 +148,21 @@ def test_a_packed_float_world_gives_the_rig_its_file_gives(addon, tmp_path):
     img[..., 0] *= 0.6
     path = _write_map(str(tmp_path / "map.exr"), img)
     spaces = ["Linear Rec.709", "ACEScg"] if bpy.app.version >= (5, 0, 0) else [None]
+    # Region lights, light by light: the irradiance fit (on by default) is
+    # not continuous in the map (two maps equal to 1e-4 can end in two
+    # equally good arrangements), and the pixels, not the fit, are tested here.
+    plain = dict(count=16, fit_irradiance=False)
     for space in spaces:
         if space is not None and space != bpy.data.colorspace.working_space:
             _clear_images()  # Blender refuses to change the working space while an image is unsaved
             assert bpy.ops.wm.set_working_color_space(working_space=space) == {"FINISHED"}
         world = _world_with(scene, path)
         image = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeTexEnvironment").image
-        assert bpy.ops.penumbra.build_light_rig(count=16, json_path=str(tmp_path / "f.json")) == {"FINISHED"}
+        assert bpy.ops.penumbra.build_light_rig(json_path=str(tmp_path / "f.json"), **plain) == {"FINISHED"}
         from_file = _suns_rgb(scene)
         image.pack()
         assert image.packed_file is not None
-        assert bpy.ops.penumbra.build_light_rig(count=16, json_path=str(tmp_path / "p.json")) == {"FINISHED"}
+        assert bpy.ops.penumbra.build_light_rig(json_path=str(tmp_path / "p.json"), **plain) == {"FINISHED"}
         np.testing.assert_allclose(_suns_rgb(scene), from_file, rtol=1e-4, atol=1e-6, err_msg=str(space))
 
 

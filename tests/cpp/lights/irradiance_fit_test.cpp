@@ -57,21 +57,102 @@ TEST(LightsIrradianceFit, halves_the_unfitted_rigs_irradiance_error_for_each_ble
         }
 }
 
-TEST(LightsIrradianceFit, colours_are_never_negative_and_lights_stay_in_their_regions) {
+TEST(LightsIrradianceFit, colours_are_never_negative_and_sum_to_the_maps_integral) {
     const EnvironmentMap map = as_map(two_suns_on_a_sky(128, 64));
-    for (int count : {1, 7, 64}) {
-        const FrameLights start = rig(map, count, false, SunModel::blender4_cone);
-        const FrameLights fitted = rig(map, count, true, SunModel::blender4_cone);
-        ASSERT_EQ(start.lights.size(), fitted.lights.size());
-        for (std::size_t k = 0; k < start.lights.size(); ++k) {
-            const Light &a = start.lights[k], &b = fitted.lights[k];
-            EXPECT_TRUE(b.rgb.allFinite());
-            EXPECT_GE(b.rgb.minCoeff(), 0.0);
-            const double moved = std::atan2(a.direction.cross(b.direction).norm(), a.direction.dot(b.direction));
-            EXPECT_LE(moved, fit_reach(map, a, 1.0) + 1e-9) << "light " << k;
-            EXPECT_EQ(a.spread, b.spread);
+    const Eigen::Vector3d total = integral_rgb(map);
+    for (SunModel model : {SunModel::blender3_disc, SunModel::blender4_cone})
+        for (int count : {1, 7, 64}) {
+            const FrameLights fitted = rig(map, count, true, model);
+            Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+            for (const Light& l : fitted.lights) {
+                EXPECT_TRUE(l.rgb.allFinite() && l.direction.allFinite());
+                EXPECT_GE(l.rgb.minCoeff(), 0.0);
+                EXPECT_NEAR(l.direction.norm(), 1.0, 1e-12);
+                sum += l.rgb;
+            }
+            // The fit alone lands within ~1e-4 of it (irradiance's mean over
+            // all normals is flux/4); the final solve makes it exact.
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c], total[c], 1e-12 * total[c]) << "N " << count;
         }
+}
+
+TEST(LightsIrradianceFit, a_reach_or_a_move_bound_holds_each_light_near_its_start) {
+    const EnvironmentMap map = as_map(two_suns_on_a_sky(128, 64));
+    const FrameLights start = rig(map, 16, false, SunModel::blender4_cone);
+    IrradianceFitOptions o;
+    o.reach = 1.0;
+    o.fit_angles = false;
+    std::vector<Light> reached = start.lights;
+    fit_irradiance(map, reached, o);
+    o = {};
+    o.move_bound.assign(start.lights.size(), 0.002);
+    std::vector<Light> bounded = start.lights;
+    fit_irradiance(map, bounded, o);
+    auto angle = [](const Light& a, const Light& b) {
+        return std::atan2(a.direction.cross(b.direction).norm(), a.direction.dot(b.direction));
+    };
+    double moved = 0.0;
+    for (std::size_t k = 0; k < start.lights.size(); ++k) {
+        const Light& a = start.lights[k];
+        EXPECT_LE(angle(a, reached[k]), fit_reach(map, a, 1.0) + 1e-9) << "light " << k;
+        EXPECT_EQ(a.spread, reached[k].spread);  // angles not fitted
+        EXPECT_LE(angle(a, bounded[k]), 0.002 + 1e-9) << "light " << k;
+        moved = std::max(moved, angle(a, reached[k]));
     }
+    EXPECT_GT(moved, 0.002);  // the bounds bind: the fit would move further
+}
+
+TEST(LightsIrradianceFit, a_strong_colour_prior_keeps_the_colours) {
+    // The video tracker's prior: lights sharing a sun keep their split.
+    const EnvironmentMap map = as_map(two_suns_on_a_sky(128, 64));
+    std::vector<Light> lights = rig(map, 16, false, SunModel::blender4_cone).lights;
+    IrradianceFitOptions o;
+    o.iterations = 0;
+    o.keep_flux = false;
+    for (const Light& l : lights) o.prior_rgb.push_back(l.rgb);
+    std::vector<Light> free = lights, held = lights;
+    fit_irradiance(map, free, o);
+    o.prior_weight = 1e6;
+    fit_irradiance(map, held, o);
+    double free_change = 0.0, held_change = 0.0, scale = 0.0;
+    for (std::size_t k = 0; k < lights.size(); ++k) {
+        free_change += (free[k].rgb - lights[k].rgb).norm();
+        held_change += (held[k].rgb - lights[k].rgb).norm();
+        scale += lights[k].rgb.norm();
+    }
+    EXPECT_GT(free_change, 0.05 * scale);
+    EXPECT_LT(held_change, 1e-3 * scale);
+}
+
+TEST(LightsIrradianceFit, fitting_the_sun_angles_helps_where_regions_are_wide) {
+    // Four lights for two suns and a sky: each region is a quarter of the
+    // sphere and its sun as wide, far from the shape of what it holds.
+    const EnvironmentMap map = as_map(two_suns_on_a_sky(128, 64));
+    for (SunModel model : {SunModel::blender3_disc, SunModel::blender4_cone}) {
+        const FrameLights start = rig(map, 4, false, model);
+        IrradianceFitOptions o;
+        o.sun_model = model;
+        std::vector<Light> with = start.lights, without = start.lights;
+        fit_irradiance(map, with, o);
+        o.fit_angles = false;
+        fit_irradiance(map, without, o);
+        FrameLights a = start, b = start;
+        a.lights = with;
+        b.lights = without;
+        const double ea = rig_error(map, a, model), eb = rig_error(map, b, model);
+        EXPECT_LT(ea, 0.7 * eb) << "model " << int(model) << ": " << ea << " with, " << eb << " without";
+    }
+}
+
+TEST(LightsIrradianceFit, lights_of_a_hemispherical_map_stay_above_the_horizon) {
+    // A sky and a low sun over a black ground: irradiance from below the
+    // horizon is zero, but a wide sun leaning below it could still fit the
+    // normals' irradiance; the fit keeps every light at z ≥ 0.
+    Image sky = testing::sky_and_sun(256, 64, 0.3, Eigen::Vector3d(0.8, 0.2, 0.08), 0.08, 400.0);
+    const EnvironmentMap map = as_map(sky, Projection::hemisphere_polar);
+    for (int count : {4, 24})
+        for (const Light& l : rig(map, count, true, SunModel::blender4_cone).lights)
+            EXPECT_GE(l.direction.z(), 0.0) << "N " << count;
 }
 
 TEST(LightsIrradianceFit, a_black_map_gives_black_lights) {

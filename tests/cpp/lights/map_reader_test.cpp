@@ -334,6 +334,9 @@ TEST(LightsMapReader, fisheye_and_mirror_ball_sequences_give_the_lat_long_sequen
         RigOptions o;
         o.map.max_width = side / 2;
         o.lights.count = 16;
+        // Region lights: the fit would take two nearly equal maps to two of
+        // its many nearly equal optima, light by light (it is tested apart).
+        o.lights.fit_irradiance = false;
         o.map.projection = pair.round;
         const LightSource round_source(dir.file("round_0001.exr"), FrameSourceKind::automatic, band);
         ReadReport report;

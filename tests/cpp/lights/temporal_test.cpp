@@ -91,15 +91,61 @@ TEST(LightsTemporal, filtered_lights_keep_power_and_lose_jitter) {
     for (auto& f : frames) totals.push_back(f.total_power);
     const auto expected = filter_sequence(totals, paper_filter());
     const double before = roughness(frames);
+    std::vector<FrameLights> paper = frames;
     filter_lights(frames, paper_filter());
+    filter_lights(paper, paper_filter(), true);
     EXPECT_LT(roughness(frames), 0.6 * before);
     for (std::size_t t = 0; t < frames.size(); ++t) {
-        double s = 0;
+        double own = 0, filtered = 0;
         for (const auto& l : frames[t].lights) {
-            s += l.power;
+            own += l.power;
             EXPECT_NEAR(l.direction.norm(), 1.0, 1e-12);
         }
-        EXPECT_NEAR(s, expected[t], 1e-9);
+        for (const auto& l : paper[t].lights) filtered += l.power;
+        // By default each frame keeps its own brightness; the paper's way low-passes it too.
+        EXPECT_NEAR(own, totals[t], 1e-9);
+        EXPECT_NEAR(frames[t].total_power, totals[t], 1e-9);
+        EXPECT_NEAR(filtered, expected[t], 1e-9);
+    }
+}
+
+TEST(LightsTemporal, a_steadily_turning_light_stays_where_it_is_up_to_the_ends) {
+    // One light turning 1° per frame about +z, 20 frames: every centred
+    // window is symmetric about the frame, so the filtered direction is the
+    // frame's own, the first and last frames included, up to the circle's
+    // curvature (the mean of points on a small circle lies a little inside
+    // it: up to 3e-4 rad here). A window padded with copies of the end frames
+    // would pull them back by a quarter of a frame's motion, 5e-3 rad.
+    std::vector<FrameLights> frames(20);
+    for (int t = 0; t < 20; ++t) {
+        Light l;
+        const double a = t * pi / 180.0;
+        l.direction = Eigen::Vector3d(std::cos(a), std::sin(a), 0.3).normalized();
+        l.rgb = Eigen::Vector3d::Ones();
+        l.power = 1.0;
+        frames[t].lights = {l};
+    }
+    const std::vector<FrameLights> raw = frames;
+    for (const FirFilter& f : {paper_filter(), filter_for_rate(60.0)}) {
+        frames = raw;
+        filter_lights(frames, f);
+        for (int t = 0; t < 20; ++t)
+            EXPECT_LT((frames[t].lights[0].direction - raw[t].lights[0].direction).norm(), 5e-4) << "frame " << t;
+    }
+}
+
+TEST(LightsTemporal, windows_shrink_symmetrically_at_the_ends) {
+    const FirFilter f = paper_filter();
+    EXPECT_EQ(f.window(0, 10), std::vector<double>{1.0});
+    EXPECT_EQ(f.window(9, 10), std::vector<double>{1.0});
+    EXPECT_EQ(f.window(5, 10).size(), 9u);
+    for (int t = 0; t < 10; ++t) {
+        const auto w = f.window(t, 10);
+        double sum = 0;
+        for (double v : w) sum += v;
+        EXPECT_NEAR(sum, 1.0, 1e-12);
+        EXPECT_LE(int(w.size() / 2), std::min(t, 9 - t));
+        for (std::size_t i = 0; i < w.size(); ++i) EXPECT_EQ(w[i], w[w.size() - 1 - i]);
     }
 }
 

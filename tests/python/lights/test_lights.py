@@ -15,7 +15,7 @@ import _penumbra
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 import lights_make_test_videos as videos  # noqa: E402
-from lights_median_cut import median_cut  # noqa: E402
+from lights_median_cut import median_cut, median_cut_suns  # noqa: E402
 
 from conftest import BLENDER_OCIO  # noqa: E402
 
@@ -45,11 +45,35 @@ def test_region_lights_are_within_1_2x_median_cut_irradiance_error_of_a_bundled_
     reference = numpy_irradiance(np.maximum(image, 0), normals)
     ours, baseline = {}, {}
     for n in (16, 64, 256):
-        lights = _penumbra.lights.frame_lights(image, count=n)
+        lights = _penumbra.lights.frame_lights(image, count=n, fit_irradiance=False)
         ours[n] = relative_irradiance_error(lights["directions"], lights["rgb"], normals, reference)
         baseline[n] = relative_irradiance_error(*median_cut(np.maximum(image, 0), n), normals, reference)
     assert ours[256] < ours[16]
     assert ours[64] <= 1.2 * baseline[64], (ours, baseline)
+
+
+@pytest.mark.parametrize("sun_model", ["BLENDER3_DISC", "BLENDER4_CONE"])
+def test_the_fitted_rig_has_at_most_half_median_cuts_irradiance_error_drawn_as_suns(sun_model):
+    """Issue #14 goal 1 on its hardest case: sunrise.exr at 16 lights, where
+    median cut puts four suns on the sun. Both rigs drawn as this Blender
+    draws suns (each with its region's or rectangle's angle), against a
+    numpy reference over 300 normals. The fit that kept the regions' angles
+    and moved lights at most one spread scored 1.6× (3.4) and 1.4× (4.x);
+    now about 0.1×."""
+    image = np.maximum(videos.load_world("sunrise", 256), 0)
+    normals = _penumbra.sh.fibonacci_directions(300)
+    reference = numpy_irradiance(image, normals)
+    y = np.array([0.2126, 0.7152, 0.0722])
+
+    def error(d, rgb, spread):
+        e = _penumbra.lights.irradiance(d, rgb, normals, spread=spread, sun_model=sun_model)
+        return math.sqrt((((e - reference) @ y) ** 2).sum() / ((reference @ y) ** 2).sum())
+
+    fitted = _penumbra.lights.frame_lights(image, count=16, fit_irradiance=True, sun_model=sun_model)
+    np.testing.assert_allclose(fitted["rgb"].sum(axis=0), fitted["total_rgb"], rtol=1e-12)
+    ours = error(fitted["directions"], fitted["rgb"], fitted["spread"])
+    baseline = error(*median_cut_suns(image, 16))
+    assert ours <= 0.5 * baseline, (ours, baseline)
 
 
 def test_exact_irradiance_binding_agrees_with_numpy():
@@ -168,7 +192,7 @@ def test_truncated_video_is_an_io_error(tmp_path):
 
 
 def test_clustering_and_region_tables_through_the_bindings():
-    lights = _penumbra.lights.frame_lights(videos.load_world("courtyard", 256), count=200)
+    lights = _penumbra.lights.frame_lights(videos.load_world("courtyard", 256), count=200, fit_irradiance=False)
     c = _penumbra.lights.cluster(lights["directions"], lights["rgb"], max_clusters=20)
     assert len(c["index"]) <= 20
     np.testing.assert_allclose(c["rgb"].sum(axis=0), lights["rgb"].sum(axis=0), rtol=1e-9)
@@ -187,3 +211,53 @@ def test_filter_taps_match_the_paper_at_21_hz():
     paper = np.array([0.06216, 0.01296, -0.13816, 0.28315, 0.65223, 0.28315, -0.13816, 0.01296, 0.06216])
     np.testing.assert_allclose(taps, paper / paper.sum(), atol=1e-12)
     assert abs(np.sum(_penumbra.lights.temporal_filter(60.0)) - 1) < 1e-12
+
+
+def _steps_after_the_turn(rig, degrees_per_frame):
+    """Flux-weighted mean and largest step of the lights between frames once
+    the map's own turn about +z is removed (degrees)."""
+    a = math.radians(degrees_per_frame)
+    turn = np.array([[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]])
+    d, p = rig["directions"], rig["power"]
+    angles, weights = [], []
+    for t in range(1, len(d)):
+        cos = np.clip(np.sum((d[t - 1] @ turn.T) * d[t], axis=1), -1, 1)
+        angles.append(np.degrees(np.arccos(cos)))
+        weights.append(p[t - 1] / p[t - 1].sum() + p[t] / p[t].sum())
+    angles, weights = np.concatenate(angles), np.concatenate(weights)
+    return float((angles * weights).sum() / weights.sum()), float(angles.max())
+
+
+def test_followed_lights_turn_with_the_map_and_resampled_ones_wander():
+    """RigBuilder's tracking (core/lights/tracking.hpp) through the binding:
+    courtyard.exr turning 2° per frame. Followed lights (the default) move
+    with the map; resampled ones (the paper's, and this tool's before issue
+    #14) wander. Measured: 0.06° / 0.3° (mean / largest), against 4.9° / 70°."""
+    frames = videos.rotation_frames(np.maximum(videos.load_world("courtyard", 128), 0), 8, 2.0)
+    rigs = {}
+    for tracking in ("FOLLOW", "RESAMPLE"):
+        builder = _penumbra.lights.RigBuilder(count=16, frames_per_second=24, tracking=tracking)
+        for f in frames:
+            builder.add_frame(f)
+        rigs[tracking] = _steps_after_the_turn(builder.finish(), 2.0)
+    assert rigs["FOLLOW"][0] < 0.2 and rigs["FOLLOW"][1] < 0.6, rigs
+    assert rigs["RESAMPLE"][0] > 0.5 and rigs["RESAMPLE"][1] > 5.0, rigs
+
+
+def test_each_frame_keeps_its_own_brightness_unless_asked_to_filter_it():
+    """±10% exposure noise on a still map: by default every frame's lights sum
+    to that frame's own ∫L dω; filter_brightness low-passes the totals (the
+    paper's), so they come out smoother than the frames'."""
+    base = videos.sun_disc(32, 64, (0.3, 0.2, 0.9), 0.2, 50.0, sky_radiance=0.5)
+    rng = np.random.default_rng(3)
+    factors = rng.uniform(0.9, 1.1, 12)
+    frames = [(base * f).astype(np.float32) for f in factors]
+    own = np.array([(f * videos.solid_angles(32, 64)[:, None, None]).sum(axis=(0, 1)) for f in frames])
+    totals = {}
+    for smooth in (False, True):
+        builder = _penumbra.lights.RigBuilder(count=8, frames_per_second=24, filter_brightness=smooth)
+        for f in frames:
+            builder.add_frame(f)
+        totals[smooth] = builder.finish()["rgb"].sum(axis=1)
+    np.testing.assert_allclose(totals[False], own, rtol=1e-9)
+    assert np.std(np.diff(totals[True][:, 1])) < 0.5 * np.std(np.diff(own[:, 1]))
