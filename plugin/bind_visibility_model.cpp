@@ -54,6 +54,29 @@ std::shared_ptr<const sh::PoseShader> shader_for(int order) {
     return slot;
 }
 
+// The lighting's SH coefficients, one row per term of `order`, RGB columns.
+Eigen::MatrixXd lighting_sh(const Doubles& lighting, int order) {
+    const py::ssize_t n_sh = py::ssize_t(order) * order;
+    if (lighting.ndim() != 2 || lighting.shape(0) != n_sh || lighting.shape(1) != 3)
+        throw py::value_error("lighting must have shape (" + std::to_string(n_sh) + ", 3), got " + shape_of(lighting));
+    Eigen::MatrixXd l(n_sh, 3);
+    for (py::ssize_t i = 0; i < n_sh; ++i)
+        for (int c = 0; c < 3; ++c) l(i, c) = lighting.at(i, c);
+    return l;
+}
+
+sh::ShadingParameters shading_parameters(sh::ShadingModel model, double phong_exponent,
+                                         const std::array<double, 3>& camera,
+                                         const std::array<double, 3>& transmission, int threads) {
+    sh::ShadingParameters sp;
+    sp.model = model;
+    sp.phong_exponent = phong_exponent;
+    sp.camera = Eigen::Vector3d(camera[0], camera[1], camera[2]);
+    sp.transmission = transmission;
+    sp.threads = threads;
+    return sp;
+}
+
 py::tuple synthesize(const vis::PoseModel& x, const Floats& joint_rotations, int threads) {
     const auto r = rotations(joint_rotations, x.joints.size(), "joint_rotations");
     const std::size_t V = x.vertex_count;
@@ -74,18 +97,8 @@ py::tuple shade(const vis::PoseModel& x, const Floats& joint_rotations, const Fl
     const auto r = rotations(joint_rotations, x.joints.size(), "joint_rotations");
     const auto p = triples(positions, "positions"), n = triples(normals, "normals");
     const auto t = indices(triangles, "triangles", true), nb = indices(neighbours, "neighbours", false);
-    const py::ssize_t n_sh = py::ssize_t(x.order) * x.order;
-    if (lighting.ndim() != 2 || lighting.shape(0) != n_sh || lighting.shape(1) != 3)
-        throw py::value_error("lighting must have shape (" + std::to_string(n_sh) + ", 3), got " + shape_of(lighting));
-    Eigen::MatrixXd l(n_sh, 3);
-    for (py::ssize_t i = 0; i < n_sh; ++i)
-        for (int c = 0; c < 3; ++c) l(i, c) = lighting.at(i, c);
-    sh::ShadingParameters sp;
-    sp.model = model;
-    sp.phong_exponent = phong_exponent;
-    sp.camera = Eigen::Vector3d(camera[0], camera[1], camera[2]);
-    sp.transmission = transmission;
-    sp.threads = threads;
+    const Eigen::MatrixXd l = lighting_sh(lighting, x.order);
+    const sh::ShadingParameters sp = shading_parameters(model, phong_exponent, camera, transmission, threads);
     vis::RuntimeResult result;
     {
         py::gil_scoped_release release;
@@ -143,18 +156,8 @@ py::tuple shade_frame(const vis::PoseModel& x, const vis::RuntimeMesh& mesh, con
     Eigen::Matrix4d w;
     for (int i = 0; i < 4; ++i)
         for (int j = 0; j < 4; ++j) w(i, j) = world.at(i, j);
-    const py::ssize_t n_sh = py::ssize_t(x.order) * x.order;
-    if (lighting.ndim() != 2 || lighting.shape(0) != n_sh || lighting.shape(1) != 3)
-        throw py::value_error("lighting must have shape (" + std::to_string(n_sh) + ", 3), got " + shape_of(lighting));
-    Eigen::MatrixXd l(n_sh, 3);
-    for (py::ssize_t i = 0; i < n_sh; ++i)
-        for (int c = 0; c < 3; ++c) l(i, c) = lighting.at(i, c);
-    sh::ShadingParameters sp;
-    sp.model = model;
-    sp.phong_exponent = phong_exponent;
-    sp.camera = Eigen::Vector3d(camera[0], camera[1], camera[2]);
-    sp.transmission = transmission;
-    sp.threads = threads;
+    const Eigen::MatrixXd l = lighting_sh(lighting, x.order);
+    const sh::ShadingParameters sp = shading_parameters(model, phong_exponent, camera, transmission, threads);
     auto rgba = output_array(rgba_out, {py::ssize_t(V), 4}, "rgba_out");
     auto visibility = output_array(visibility_out, {py::ssize_t(V)}, "visibility_out");
     float* rgba_data = rgba.mutable_data();
