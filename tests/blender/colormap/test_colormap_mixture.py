@@ -8,7 +8,7 @@ import numpy as np
 from penumbra import native
 from penumbra.colormap import node_groups
 
-from test_colormap_noise import _render, _render_scene
+from test_colormap_noise import _baked_plane_and_error, _render, _render_scene
 
 
 def _table_lookup(table, spec, mean, sigma):
@@ -65,19 +65,9 @@ def test_mixture_beats_one_gaussian_at_one_sample(addon, tmp_path):
     ramp at 1024 spp: the baked material (the four-Gaussian mixture the
     Noise Filter hands the ramp) against the same material fed its Mean and
     Sigma only (one Gaussian, the filter before)."""
-    addon.penumbra.colormap.output_folder = str(tmp_path)
-    material, ramp, emission, camera = _render_scene(addon, 80.0)
-    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
-    tree = material.node_tree
-    group = tree.nodes[node_groups.FILTERED_RAMP]
-    ramp.mute = False
-    tree.links.new(ramp.outputs["Color"], emission.inputs["Color"])
-    reference = _render(addon, str(tmp_path / "reference.exr"), 1024, 7)
-    ground = reference.sum(axis=2) > 0
-
-    def rmse(image):
-        return float(np.sqrt(((image - reference)[ground] ** 2).mean()))
-    tree.links.new(group.outputs["Color"], emission.inputs["Color"])
+    plane = _baked_plane_and_error(addon, tmp_path, 80.0)
+    tree, group, rmse = plane.material.node_tree, plane.group, plane.rmse
+    tree.links.new(group.outputs["Color"], plane.emission.inputs["Color"])
     mixture = rmse(_render(addon, str(tmp_path / "mixture.exr"), 1, 0))
     for name in ("Offsets", "Variances"):
         tree.links.remove(group.inputs[name].links[0])

@@ -4,6 +4,7 @@ and a filtered Cycles render against a high-sample reference."""
 
 import os
 import sys
+from types import SimpleNamespace
 
 import bpy
 import numpy as np
@@ -100,6 +101,29 @@ def _render(scene, path, spp, seed):
     return native.require().image.read(path)[..., :3].astype(np.float64)
 
 
+def _baked_plane_and_error(scene, tmp_path, pitch_deg, baked_samples=None, reference_spp=1024):
+    """The receding plane baked with Penumbra and its plain ramp rendered at
+    reference_spp: the material, the filtered group, the emission node, the
+    reference, the ground (the plane; the sky is black) and rmse(image)
+    against the reference over the ground. The plain ramp stays linked; link
+    the group's Color to the emission to render the filter."""
+    scene.penumbra.colormap.output_folder = str(tmp_path)
+    material, ramp, emission, _camera = _render_scene(scene, pitch_deg)
+    if baked_samples is not None:
+        scene.cycles.samples = baked_samples
+    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
+    group = material.node_tree.nodes[node_groups.FILTERED_RAMP]
+    ramp.mute = False
+    material.node_tree.links.new(ramp.outputs["Color"], emission.inputs["Color"])
+    reference = _render(scene, str(tmp_path / "reference.exr"), reference_spp, 7)
+    ground = reference.sum(axis=2) > 0
+
+    def rmse(image):
+        return float(np.sqrt(((image - reference)[ground] ** 2).mean()))
+    return SimpleNamespace(material=material, group=group, emission=emission, reference=reference,
+                           ground=ground, rmse=rmse)
+
+
 def test_footprint_node_matches_the_projected_pixel(addon, tmp_path):
     """The footprint group rendered at pixel centres against the footprint
     computed here from the camera: the pixel's edge midpoints projected onto
@@ -164,22 +188,12 @@ def test_filtered_render_is_closer_to_the_reference_than_the_plain_ramp(addon, t
     sharp ramp. At 1 spp the filtered material is much closer to a 256-spp
     render of the plain ramp than the plain ramp at 1 spp, and in the far
     field (where the ramp averages out) its mean colour matches the reference."""
-    addon.penumbra.colormap.output_folder = str(tmp_path)
-    material, ramp, emission, camera = _render_scene(addon, 84.0)
-    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
-    tree = material.node_tree
-    group = tree.nodes[node_groups.FILTERED_RAMP]
-    ramp.mute = False
-    tree.links.new(ramp.outputs["Color"], emission.inputs["Color"])
-    reference = _render(addon, str(tmp_path / "reference.exr"), 256, 7)
+    plane = _baked_plane_and_error(addon, tmp_path, 84.0, reference_spp=256)
     plain = _render(addon, str(tmp_path / "plain.exr"), 1, 1)
-    tree.links.new(group.outputs["Color"], emission.inputs["Color"])
+    plane.material.node_tree.links.new(plane.group.outputs["Color"], plane.emission.inputs["Color"])
     filtered = _render(addon, str(tmp_path / "filtered.exr"), 1, 1)
-    ground = reference.sum(axis=2) > 0  # the plane (the sky is black)
+    ground, reference, rmse = plane.ground, plane.reference, plane.rmse
     assert ground.mean() > 0.5
-
-    def rmse(image):
-        return float(np.sqrt(((image - reference)[ground] ** 2).mean()))
     assert rmse(filtered) < 0.6 * rmse(plain), (rmse(filtered), rmse(plain))
     far = ground & (np.arange(RENDER_H)[:, None] < RENDER_H * 0.45)  # the rows near the horizon
     assert far.sum() > 50

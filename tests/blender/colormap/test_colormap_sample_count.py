@@ -8,7 +8,7 @@ import numpy as np
 
 from penumbra.colormap import node_groups, sample_count
 
-from test_colormap_noise import _render, _render_scene
+from test_colormap_noise import _baked_plane_and_error, _render, _render_scene
 
 
 def _noise_filter(material):
@@ -64,21 +64,11 @@ def test_more_samples_converge_where_the_pixel_centred_filter_does_not(addon, tm
     is no worse than the plain ramp at 64 spp and at 4 spp well below the
     plain ramp's error; held at one sample (the pixel-centred filter of a
     1-spp render), it stays far from the reference at 64 spp."""
-    addon.penumbra.colormap.output_folder = str(tmp_path)
-    material, ramp, emission, camera = _render_scene(addon, 84.0)
-    addon.cycles.samples = 1   # baked at one sample: only the driver can tell it 4 or 64
-    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
-    tree = material.node_tree
-    group = tree.nodes[node_groups.FILTERED_RAMP]
-    ramp.mute = False
-    tree.links.new(ramp.outputs["Color"], emission.inputs["Color"])
-    reference = _render(addon, str(tmp_path / "reference.exr"), 1024, 7)
-    ground = reference.sum(axis=2) > 0
-
-    def rmse(image):
-        return float(np.sqrt(((image - reference)[ground] ** 2).mean()))
+    # Baked at one sample: only the driver can tell it 4 or 64.
+    plane = _baked_plane_and_error(addon, tmp_path, 84.0, baked_samples=1)
+    material, group, emission, rmse = plane.material, plane.group, plane.emission, plane.rmse
     plain = {spp: rmse(_render(addon, str(tmp_path / f"plain{spp}.exr"), spp, 1)) for spp in (4, 64)}
-    tree.links.new(group.outputs["Color"], emission.inputs["Color"])
+    material.node_tree.links.new(group.outputs["Color"], emission.inputs["Color"])
     filtered = {spp: rmse(_render(addon, str(tmp_path / f"filtered{spp}.exr"), spp, 1)) for spp in (4, 64)}
     assert filtered[4] < 0.8 * plain[4], (filtered, plain)
     assert filtered[64] < 1.1 * plain[64], (filtered, plain)
