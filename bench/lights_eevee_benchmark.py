@@ -148,22 +148,6 @@ def render_main(out, engine):
 
 # --- the driver ----------------------------------------------------------------
 
-def replace_section(text, marker, section, after):
-    """Replaces the section starting at `marker` (up to the next "## "
-    heading) with `section`; when absent, inserts it before the heading that
-    follows the section starting at `after`, else at the end."""
-    if marker in text:
-        start = text.index(marker)
-        end = text.find("\n## ", start + len(marker))
-        end = len(text) if end < 0 else end
-        return text[:start].rstrip("\n") + "\n" + section + text[end:]
-    if after in text:
-        end = text.find("\n## ", text.index(after) + len(after))
-        if end >= 0:
-            return text[:end].rstrip("\n") + "\n" + section + text[end:]
-    return text.rstrip("\n") + "\n" + section
-
-
 def rows(r):
     """Table rows of one Blender's EEVEE renders."""
     legacy = r["engine"] == LEGACY
@@ -250,18 +234,15 @@ def run_blender(command, out, engine):
 
 
 def main():
-    import fcntl
     import shutil
     import tempfile
-    lock = sys.argv[sys.argv.index("--lock") + 1] if "--lock" in sys.argv else None
+    from bench_doc import lock_path, locked, write_section  # the driver runs from bench/
+    lock = lock_path(sys.argv)
     started = time.time()
     this = os.path.abspath(__file__)
     middle = COUNTS[len(COUNTS) // 2]
     results = []
-    held = open(lock, "a") if lock else None
-    try:
-        if held:
-            fcntl.flock(held, fcntl.LOCK_EX)
+    with locked(lock):
         for command, engine, pictures in (
                 (["xvfb-run", "-a", "blender", "-b", "--factory-startup", "--python", this, "--"], LEGACY,
                  (("cycles_world", "eevee_cycles_world.png"), ("eevee_world", "eevee_world.png"),
@@ -273,15 +254,7 @@ def main():
                 print(json.dumps(results[-1], indent=1), flush=True)
                 for name, picture in pictures:
                     shutil.copyfile(os.path.join(out, name + ".png"), os.path.join(PICTURES, picture))
-    finally:
-        if held:
-            fcntl.flock(held, fcntl.LOCK_UN)
-            held.close()
-    with open(DOC) as f:
-        text = f.read()
-    text = replace_section(text, MARKER, section(results, time.time() - started), "\n## Shadowed comparison (Cycles)")
-    with open(DOC, "w") as f:
-        f.write(text)
+    write_section(DOC, MARKER, section(results, time.time() - started), "\n## Shadowed comparison (Cycles)")
     print("wrote", DOC)
 
 

@@ -29,6 +29,7 @@ sys.path.insert(0, os.path.join(ROOT, "bench"))
 import lights_make_test_videos as data  # noqa: E402
 from lights_median_cut import median_cut_suns  # noqa: E402
 import svg_plot  # noqa: E402
+from bench_doc import write_section  # noqa: E402
 import _penumbra  # noqa: E402  (lights_make_test_videos put it on sys.path)
 
 Y = np.array([0.2126, 0.7152, 0.0722])
@@ -117,16 +118,6 @@ def section(rows, names, seconds):
             "[irradiance_fit.svg](lights/irradiance_fit.svg).", ""] + lines + [""]
 
 
-def replace_section(path, new_lines):
-    text = open(path).read() if os.path.exists(path) else ""
-    head = text.split(SECTION)[0].rstrip("\n")
-    rest = text.split(SECTION)[1] if SECTION in text else ""
-    tail = rest[rest.find("\n## "):] if "\n## " in rest else ""
-    with open(path + ".tmp", "w") as f:
-        f.write(head + "\n\n" + "\n".join(new_lines) + tail.rstrip("\n") + "\n")
-    os.replace(path + ".tmp", path)
-
-
 def run(names=data.WORLDS):
     started = time.time()
     normals = _penumbra.sh.fibonacci_directions(1000)
@@ -141,5 +132,5 @@ def run(names=data.WORLDS):
 
 if __name__ == "__main__":
     path = os.path.join(ROOT, "docs", "lights-benchmark.md")
-    replace_section(path, run())
+    write_section(path, SECTION, "\n" + "\n".join(run()))
     print(f"wrote {path}")

@@ -16,8 +16,6 @@ and replace it in the existing file. --lock PATH holds an exclusive lock on
 PATH (e.g. /work/bench.lock) around each timed part, not while videos are
 encoded."""
 
-import contextlib
-import fcntl
 import os
 import shutil
 import subprocess
@@ -28,6 +26,7 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WORLD = "/usr/share/blender/datafiles/studiolights/world/forest.exr"
 OUT = os.path.join(ROOT, "docs", "lights-timing-benchmark.md")
+from bench_doc import lock_path, locked, write_section  # noqa: E402  (bench/ is the script's directory)
 
 # Runs inside the bpy module (a fresh process): operator on the 16k file.
 BPY_SCRIPT = r"""
@@ -111,20 +110,6 @@ def run_16k(exe, tmp):
 
 
 FRAMES = 48  # per video: 2 s at 24 fps, 1024x512
-
-
-@contextlib.contextmanager
-def locked(path):
-    """An exclusive flock on `path` (nothing when None) while the block runs."""
-    if not path:
-        yield
-        return
-    with open(path, "a") as f:
-        fcntl.flock(f, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(f, fcntl.LOCK_UN)
 
 
 def load_average():
@@ -217,22 +202,11 @@ def run_video(exe, tmp, lock, rounds=5):
     return "\n".join(md) + "\n"
 
 
-def replace_section(text, marker, section):
-    """Replaces the section starting at `marker` (up to the next "## " heading)
-    with `section`, or appends it when absent."""
-    if marker in text:
-        start = text.index(marker)
-        end = text.find("\n## ", start + len(marker))
-        end = len(text) if end < 0 else end
-        return text[:start].rstrip("\n") + "\n" + section + text[end:]
-    return text.rstrip("\n") + "\n" + section
-
-
 def main():
     exe = os.path.join(ROOT, "build", "bench", "penumbra_lights_bench")
     if not os.path.exists(exe):
         sys.exit("build/bench/penumbra_lights_bench is missing; run `make build`")
-    lock = sys.argv[sys.argv.index("--lock") + 1] if "--lock" in sys.argv else None
+    lock = lock_path(sys.argv)
     only = [a[len("--only-"):] for a in sys.argv if a.startswith("--only-")]
     wanted = lambda name: not only or name in only  # noqa: E731
     if wanted("frame"):
@@ -251,20 +225,14 @@ def main():
         with locked(lock):
             regions = subprocess.run([exe, "--regions", WORLD], check=True, capture_output=True, text=True).stdout
         print(regions)
-        with open(OUT) as f:
-            text = f.read()
-        with open(OUT, "w") as f:
-            f.write(replace_section(text, "\n## Angular-region culling", regions))
+        write_section(OUT, "\n## Angular-region culling", regions)
     if wanted("video"):
         tmp = tempfile.mkdtemp(prefix="penumbra_lights_video_")
         try:
             section = run_video(exe, tmp, lock)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
-        with open(OUT) as f:
-            text = f.read()
-        with open(OUT, "w") as f:
-            f.write(replace_section(text, "\n## Video decoding", section))
+        write_section(OUT, "\n## Video decoding", section)
     if wanted("16k"):
         tmp = tempfile.mkdtemp(prefix="penumbra_lights_16k_")
         try:
@@ -272,10 +240,7 @@ def main():
                 section = run_16k(exe, tmp)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
-        with open(OUT) as f:
-            text = f.read()
-        with open(OUT, "w") as f:
-            f.write(replace_section(text, "\n## A 16384x8192 map", section))
+        write_section(OUT, "\n## A 16384x8192 map", section)
     print("wrote", OUT)
 
 

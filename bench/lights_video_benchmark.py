@@ -26,14 +26,14 @@ irradiance fit when it is on by default), every sun drawn as Blender 4.5 /
 It also measures what the temporal filter's delay costs at a cut (one HDRI,
 then another) and at the first and last frames, and the same criteria for
 the rig built the old way (light k = Halton point k through each frame's
-CDF) as the baseline. Only the cost at 2048x1024 is timed (under the shared
-/work/bench.lock, as `flock` takes it). Run alone
-(`python bench/lights_video_benchmark.py [--no-timing]`) or by
+CDF) as the baseline. Only the cost at 2048x1024 is timed (under the lock
+of --lock PATH or $PENUMBRA_BENCH_LOCK, when given, as `flock` takes it).
+Run alone (`python bench/lights_video_benchmark.py [--no-timing] [--lock
+PATH]`) or by
 `make bench BENCH=lights`,
 it replaces its section of docs/lights-benchmark.md and writes
 docs/lights/video_delay.svg."""
 
-import fcntl
 
 import math
 import os
@@ -48,6 +48,7 @@ sys.path.insert(0, os.path.join(ROOT, "bench"))
 import lights_make_test_videos as data  # noqa: E402
 from lights_median_cut import median_cut_suns  # noqa: E402
 import svg_plot  # noqa: E402
+from bench_doc import lock_path, locked, write_section  # noqa: E402
 import _penumbra  # noqa: E402  (lights_make_test_videos put it on sys.path)
 
 L = _penumbra.lights
@@ -213,14 +214,12 @@ def delay_cost(normals, frames=24):
 def cost_at_2048(frames=6):
     """Seconds per frame of the default rig and of the rig before issue #14 on
     2048x1024 maps (the add-on's working width; courtyard doubled), turning
-    1° per frame, alternated A/B/A/B in the same run, under the shared
-    benchmark lock."""
+    1° per frame, alternated A/B/A/B in the same run, under the lock given
+    (--lock PATH or $PENUMBRA_BENCH_LOCK)."""
     big = np.repeat(np.repeat(np.maximum(data.load_world("courtyard"), 0), 2, axis=0), 2, axis=1)
     maps = data.rotation_frames(big, frames, 1.0)
     times = {k: [] for k in ("default (followed, fitted)", "before (resampled, no fit)")}
-    lock_path = os.environ.get("PENUMBRA_BENCH_LOCK", "/work/bench.lock")
-    with open(lock_path if os.path.exists(lock_path) else os.devnull) as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
+    with locked(lock_path(sys.argv)):
         load = os.getloadavg()[0]
         for _ in range(2):
             for label in times:
@@ -295,16 +294,6 @@ def section(rows, delays, seconds):
     return lines + [""]
 
 
-def replace_section(path, new_lines):
-    text = open(path).read() if os.path.exists(path) else ""
-    head = text.split(SECTION)[0].rstrip("\n")
-    rest = text.split(SECTION)[1] if SECTION in text else ""
-    tail = rest[rest.find("\n## "):] if "\n## " in rest else ""
-    with open(path + ".tmp", "w") as f:
-        f.write(head + "\n\n" + "\n".join(new_lines) + tail.rstrip("\n") + "\n")
-    os.replace(path + ".tmp", path)
-
-
 def run(timing=True):
     started = time.time()
     normals = _penumbra.sh.fibonacci_directions(1000)
@@ -321,5 +310,5 @@ def run(timing=True):
 
 if __name__ == "__main__":
     path = os.path.join(ROOT, "docs", "lights-benchmark.md")
-    replace_section(path, run(timing="--no-timing" not in sys.argv[1:]))
+    write_section(path, SECTION, "\n" + "\n".join(run(timing="--no-timing" not in sys.argv[1:])))
     print(f"wrote {path}")
