@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <utility>
 
 #include "lights/region_kernels.hpp"
 
@@ -62,11 +63,13 @@ constexpr int kLanes = HWY_LANES(double);
 typedef double VecD __attribute__((vector_size(kLanes * sizeof(double))));
 typedef long long MaskD __attribute__((vector_size(kLanes * sizeof(double))));
 
-inline VecD splat(double value) {
-    VecD v{};
-    for (int k = 0; k < kLanes; ++k) v[k] = value;
-    return v;
+// Written as one initializer of equal elements, which GCC emits as a single
+// broadcast (a loop of lane stores became one masked insert per lane).
+template <std::size_t... I>
+inline VecD splat_lanes(double value, std::index_sequence<I...>) {
+    return VecD{((void)I, value)...};
 }
+inline VecD splat(double value) { return splat_lanes(value, std::make_index_sequence<kLanes>{}); }
 
 inline bool any(const MaskD& m) {
     long long a = 0;
@@ -121,21 +124,56 @@ double chord2_to(Points p, std::size_t n, double cx, double cy, double cz, doubl
     return m;
 }
 
+// kV lane vectors of cells from `first` on against every candidate: each
+// candidate's coordinates are loaded once for all of them, and the kV
+// running minima are independent chains, so the loop is not held up by the
+// latency of one compare-and-select chain.
+template <int kV>
+[[gnu::always_inline]] inline void nearest_vectors(Points candidates, const int* index, std::size_t count, Points cells,
+                                                   std::size_t cells_count, std::size_t first, int* nearest) {
+    VecD x[kV], y[kV], z[kV], best[kV], best_index[kV];
+    for (int v = 0; v < kV; ++v) {
+        const std::size_t j = first + std::size_t(v) * kLanes;
+        x[v] = load(cells.x, j, cells_count);
+        y[v] = load(cells.y, j, cells_count);
+        z[v] = load(cells.z, j, cells_count);
+        best[v] = splat(std::numeric_limits<double>::infinity());
+        best_index[v] = splat(-1.0);
+    }
+    // Ascending candidates and a strict <: the lowest index wins a tie.
+    for (std::size_t i = 0; i < count; ++i) {
+        const double sx = candidates.x[i], sy = candidates.y[i], sz = candidates.z[i];
+        const VecD id = splat(double(index[i]));
+        for (int v = 0; v < kV; ++v) {
+            const VecD dx = sx - x[v], dy = sy - y[v], dz = sz - z[v];
+            const VecD d2 = (dx * dx + dy * dy) + dz * dz;
+            const MaskD nearer = d2 < best[v];
+            best[v] = nearer ? d2 : best[v];
+            best_index[v] = nearer ? id : best_index[v];
+        }
+    }
+    for (int v = 0; v < kV; ++v) {
+        const std::size_t j = first + std::size_t(v) * kLanes;
+        for (int k = 0; k < kLanes && j + std::size_t(k) < cells_count; ++k)
+            nearest[j + std::size_t(k)] = int(best_index[v][k]);
+    }
+}
+
 void nearest_candidates(Points candidates, const int* index, std::size_t count, Points cells, std::size_t cells_count,
                         int* nearest) {
-    for (std::size_t j = 0; j < cells_count; j += kLanes) {
-        const VecD x = load(cells.x, j, cells_count), y = load(cells.y, j, cells_count), z = load(cells.z, j, cells_count);
-        VecD best = splat(std::numeric_limits<double>::infinity());
-        VecD best_index = splat(-1.0);
-        // Ascending candidates and a strict <: the lowest index wins a tie.
-        for (std::size_t i = 0; i < count; ++i) {
-            const VecD dx = candidates.x[i] - x, dy = candidates.y[i] - y, dz = candidates.z[i] - z;
-            const VecD d2 = (dx * dx + dy * dy) + dz * dz;
-            const MaskD nearer = d2 < best;
-            best = nearer ? d2 : best;
-            best_index = nearer ? splat(double(index[i])) : best_index;
-        }
-        for (int k = 0; k < kLanes && j + std::size_t(k) < cells_count; ++k) nearest[j + std::size_t(k)] = int(best_index[k]);
+    // Four lane vectors at a time where the registers hold them (AVX-512 has
+    // 32), two elsewhere; then what is left.
+    constexpr int kWide = kLanes >= 8 ? 4 : 2;
+    std::size_t j = 0;
+    for (; j + kWide * kLanes <= cells_count; j += kWide * kLanes)
+        nearest_vectors<kWide>(candidates, index, count, cells, cells_count, j, nearest);
+    const std::size_t left = (cells_count - j + kLanes - 1) / kLanes;
+    switch (left) {
+        case 4: return nearest_vectors<4>(candidates, index, count, cells, cells_count, j, nearest);
+        case 3: return nearest_vectors<3>(candidates, index, count, cells, cells_count, j, nearest);
+        case 2: return nearest_vectors<2>(candidates, index, count, cells, cells_count, j, nearest);
+        case 1: return nearest_vectors<1>(candidates, index, count, cells, cells_count, j, nearest);
+        default: return;  // none left
     }
 }
 
@@ -153,123 +191,91 @@ inline double squared_angle(double x, double y, double z, double lx, double ly, 
     return angle * angle;
 }
 
-double weighted_squared_angles(const RowRun& run, double lx, double ly, double lz) {
-    const double st = run.sin_theta, ct = run.cos_theta, dz = ct - lz, dz2 = dz * dz;
+void weighted_squared_angles(const RowRun& run, Points lights, double* out) {
+    const double st = run.sin_theta, ct = run.cos_theta;
     const std::size_t n = run.cells;
-    VecD sum{};
     for (std::size_t j = 0; j < n; j += kLanes) {
-        VecD cos_lanes, sin_lanes;  // the grid's tables are padded: whole loads
+        VecD cos_lanes, sin_lanes, lx, ly, lz;  // the tables are padded: whole loads
         std::memcpy(&cos_lanes, run.cos_phi + j, sizeof cos_lanes);
         std::memcpy(&sin_lanes, run.sin_phi + j, sizeof sin_lanes);
-        const VecD dx = st * cos_lanes - lx, dy = st * sin_lanes - ly;
-        const VecD u = 0.25 * ((dx * dx + dy * dy) + dz2);
-        const VecD weight = load_masked(run.weight, j, n, run.readable);  // 0 past the run
+        std::memcpy(&lx, lights.x + j, sizeof lx);
+        std::memcpy(&ly, lights.y + j, sizeof ly);
+        std::memcpy(&lz, lights.z + j, sizeof lz);
+        const VecD dx = st * cos_lanes - lx, dy = st * sin_lanes - ly, dz = ct - lz;
+        const VecD u = 0.25 * ((dx * dx + dy * dy) + dz * dz);
+        const VecD weight = load_masked(run.weight, j, n, run.readable);  // 0 past the row
+        VecD t;
         if (!any(u > 1.0 / 64.0)) {
-            sum += weight * asin2_sum<8>(u);
-            continue;
-        }
-        VecD t = asin2_sum<asin2_terms>(u);
-        const MaskD wide = u > 1.0 / 16.0;
-        if (any(wide))
-            for (int k = 0; k < kLanes; ++k)
-                if (wide[k]) t[k] = squared_angle(st * cos_lanes[k], st * sin_lanes[k], ct, lx, ly, lz);
-        sum += weight * t;
-    }
-    double total = 0.0;
-    for (int k = 0; k < kLanes; ++k) total += sum[k];
-    return total;
-}
-
-typedef float VecF __attribute__((vector_size(kLanes * sizeof(float))));
-
-// 3·kLanes floats into three lane vectors (lane e of vector i: float
-// kLanes·i + e of the chunk), tracking the lowest value.
-struct FloatSums {
-    VecD a0{}, a1{}, a2{};
-    VecF lowest{};
-};
-[[gnu::always_inline]] inline void add_chunk(const float* f, FloatSums& s) {
-    VecF v0, v1, v2;
-    std::memcpy(&v0, f, sizeof v0);
-    std::memcpy(&v1, f + kLanes, sizeof v1);
-    std::memcpy(&v2, f + 2 * kLanes, sizeof v2);
-    s.lowest = v0 < s.lowest ? v0 : s.lowest;
-    s.lowest = v1 < s.lowest ? v1 : s.lowest;
-    s.lowest = v2 < s.lowest ? v2 : s.lowest;
-    s.a0 += __builtin_convertvector(v0, VecD);
-    s.a1 += __builtin_convertvector(v1, VecD);
-    s.a2 += __builtin_convertvector(v2, VecD);
-}
-
-// kLanes cells' weight, w cos φ and w sin φ, and which weights are 0.
-struct WeightSums {
-    VecD w{}, c{}, s{};
-    MaskD zero{};
-};
-[[gnu::always_inline]] inline void add_cells(const double* w, const double* c, const double* s, WeightSums& sums) {
-    VecD weight, cv, sv;
-    std::memcpy(&weight, w, sizeof weight);
-    std::memcpy(&cv, c, sizeof cv);
-    std::memcpy(&sv, s, sizeof sv);
-    sums.zero -= weight == 0.0;  // a true lane is −1
-    sums.w += weight;
-    sums.c += weight * cv;
-    sums.s += weight * sv;
-}
-
-// The RGB floats are summed as one flat array, 3·kLanes at a time, so no lane
-// needs to gather a pixel: lane e of vector i holds channel (kLanes·i + e) mod 3.
-// Past the run's end lanes hold zeros, which add nothing.
-RunSums run_sums(const RowRun& run) {
-    typedef int IntF __attribute__((vector_size(kLanes * sizeof(float))));
-    const std::size_t n = run.cells;
-    FloatSums f;
-    WeightSums ws;
-    std::size_t j = 0;
-    for (; j + kLanes <= n; j += kLanes) {
-        add_chunk(run.rgb + 3 * j, f);
-        add_cells(run.weight + j, run.cos_phi + j, run.sin_phi + j, ws);
-    }
-    std::size_t padding = 0;
-    if (j < n) {
-        float tail[3 * kLanes] = {};
-        double tw[kLanes] = {};
-        const int floats = int(3 * (n - j));
-        if (j + kLanes <= run.readable) {
-            std::memcpy(tail, run.rgb + 3 * j, sizeof tail);
-            std::memcpy(tw, run.weight + j, sizeof tw);
-            IntF lane{};
-            for (int k = 0; k < kLanes; ++k) lane[k] = k;
-            for (int v = 0; v < 3; ++v) {
-                VecF x;
-                std::memcpy(&x, tail + v * kLanes, sizeof x);
-                x = lane + v * kLanes < floats ? x : VecF{};
-                std::memcpy(tail + v * kLanes, &x, sizeof x);
-            }
-            for (int k = 0; k < kLanes; ++k)
-                if (j + std::size_t(k) >= n) tw[k] = 0.0;
+            t = asin2_sum<8>(u);
         } else {
-            for (int k = 0; k < floats; ++k) tail[k] = run.rgb[3 * j + std::size_t(k)];
-            for (std::size_t k = j; k < n; ++k) tw[k - j] = run.weight[k];
+            t = asin2_sum<asin2_terms>(u);
+            const MaskD wide = u > 1.0 / 16.0;
+            if (any(wide))
+                for (int k = 0; k < kLanes; ++k)
+                    if (wide[k])
+                        t[k] = squared_angle(st * cos_lanes[k], st * sin_lanes[k], ct, lx[k], ly[k], lz[k]);
         }
-        add_chunk(tail, f);
-        add_cells(tw, run.cos_phi + j, run.sin_phi + j, ws);
-        padding = j + kLanes - n;
+        const VecD product = weight * t;
+        std::memcpy(out + j, &product, sizeof product);
     }
+}
 
-    RunSums out{{0.0, 0.0, 0.0}, 0.0, 0.0, 0.0, 0, false};
-    for (int k = 0; k < kLanes; ++k) {
-        out.rgb[k % 3] += f.a0[k];
-        out.rgb[(kLanes + k) % 3] += f.a1[k];
-        out.rgb[(2 * kLanes + k) % 3] += f.a2[k];
-        out.negative |= f.lowest[k] < 0.0f;
-        out.w += ws.w[k];
-        out.w_cos += ws.c[k];
-        out.w_sin += ws.s[k];
-        out.zero_weight += std::size_t(ws.zero[k]);
+// Runs are short (at 360x90 with 300 lights 12 cells on average, 4 in
+// every other one), so a run's sums are kept per cell, not per lane of
+// cells: one 4-lane vector gathers a cell's (R, G, B, ·) with one load, the
+// other its (w, w cos φ, w sin φ, 0), and nothing is left to reduce across
+// lanes at the end. Even and odd cells go to separate sums, so two add
+// chains run side by side.
+typedef double Vec4D __attribute__((vector_size(4 * sizeof(double))));
+typedef float Vec4F __attribute__((vector_size(4 * sizeof(float))));
+typedef int Mask4F __attribute__((vector_size(4 * sizeof(float))));
+
+struct CellSums {
+    Vec4D rgb{}, weight{};
+};
+
+// Cell j; `f` = its four floats from R on (the fourth is the next cell's R,
+// left out of everything below).
+[[gnu::always_inline]] inline void add_cell(const RowRun& run, std::size_t j, Vec4F f, CellSums& sums, Vec4F& lowest,
+                                            std::size_t& zeros) {
+    const Vec4F rgb = __builtin_shuffle(f, Mask4F{0, 1, 2, 2});  // B again in place of the next cell's R
+    lowest = rgb < lowest ? rgb : lowest;
+    sums.rgb += __builtin_convertvector(f, Vec4D);
+    const double w = run.weight[j];
+    zeros += w == 0.0;
+    sums.weight += Vec4D{w, w * run.cos_phi[j], w * run.sin_phi[j], 0.0};
+}
+
+RunSums run_sums(const RowRun& run) {
+    const std::size_t n = run.cells;
+    // A cell's 4-float load reads one float past it: within the map for every
+    // cell but the map's last.
+    const std::size_t loadable = std::min(n, run.readable - 1);
+    CellSums even, odd;
+    Vec4F lowest = {0.0f, 0.0f, 0.0f, 0.0f};
+    std::size_t zeros = 0, j = 0;
+    auto cell = [&](std::size_t k) {
+        Vec4F f;
+        std::memcpy(&f, run.rgb + 3 * k, sizeof f);
+        return f;
+    };
+    for (; j + 2 <= loadable; j += 2) {
+        add_cell(run, j, cell(j), even, lowest, zeros);
+        add_cell(run, j + 1, cell(j + 1), odd, lowest, zeros);
     }
-    out.zero_weight -= padding;
-    return out;
+    for (; j < n; ++j) {
+        Vec4F f = {0.0f, 0.0f, 0.0f, 0.0f};
+        if (j < loadable) f = cell(j);
+        else std::memcpy(&f, run.rgb + 3 * j, 3 * sizeof(float));
+        add_cell(run, j, f, j % 2 == 0 ? even : odd, lowest, zeros);
+    }
+    const Vec4D rgb = even.rgb + odd.rgb, weight = even.weight + odd.weight;
+    return {{rgb[0], rgb[1], rgb[2]},
+            weight[0],
+            weight[1],
+            weight[2],
+            zeros,
+            lowest[0] < 0.0f || lowest[1] < 0.0f || lowest[2] < 0.0f};
 }
 
 }  // namespace penumbra::lights::detail::HWY_NAMESPACE
@@ -292,8 +298,8 @@ void nearest_candidates(Points candidates, const int* index, std::size_t count, 
     HWY_DYNAMIC_DISPATCH(nearest_candidates)(candidates, index, count, cells, cells_count, nearest);
 }
 
-double weighted_squared_angles(const RowRun& run, double lx, double ly, double lz) {
-    return HWY_DYNAMIC_DISPATCH(weighted_squared_angles)(run, lx, ly, lz);
+void weighted_squared_angles(const RowRun& run, Points lights, double* out) {
+    HWY_DYNAMIC_DISPATCH(weighted_squared_angles)(run, lights, out);
 }
 
 RunSums run_sums(const RowRun& run) { return HWY_DYNAMIC_DISPATCH(run_sums)(run); }

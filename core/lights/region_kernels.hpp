@@ -44,10 +44,13 @@ struct RowRun {
     std::size_t cells, readable;
 };
 
-// Σ w[j] θ_j² over the run, θ_j the angle between the cell's centre,
-// (sin θ cos φ_j, sin θ sin φ_j, cos θ), and the unit vector l: the asin²
-// series of the chord up to 29° (exact to ~1e-16 there), atan2 beyond.
-double weighted_squared_angles(const RowRun& run, double lx, double ly, double lz);
+// out[j] = w[j] θ_j² for the cells j < run.cells, θ_j the angle between the
+// cell's centre, (sin θ cos φ_j, sin θ sin φ_j, cos θ), and the unit vector
+// l_j = (lights.x[j], lights.y[j], lights.z[j]): the asin² series of the
+// chord up to 29° (exact to ~1e-16 there), atan2 beyond. Taken a whole row
+// at a time (one call, not one per run of a few cells), so `lights` and
+// `out` must be readable and writable kMaxLanes past run.cells.
+void weighted_squared_angles(const RowRun& run, Points lights, double* out);
 
 // Over the run: Σ RGB, Σ w, Σ w cos φ, Σ w sin φ, how many cells have w = 0
 // (every black cell does), and whether any value is negative (never in a
