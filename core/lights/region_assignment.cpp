@@ -140,21 +140,8 @@ private:
         const double bound2 = bound * bound;
         Candidates& kept = levels_[depth];
         kept.reserve(n);
-        // Branch-free compaction: every candidate is written, the next one
-        // overwrites it unless it was kept.
-        int* __restrict index = kept.index.data();
-        double* __restrict x = kept.x.data();
-        double* __restrict y = kept.y.data();
-        double* __restrict z = kept.z.data();
-        const double* __restrict distance = distance_.data();
-        std::size_t m = 0;
-        for (std::size_t i = 0; i < n; ++i) {
-            index[m] = parent_index[i];
-            x[m] = parent.x[i];
-            y[m] = parent.y[i];
-            z[m] = parent.z[i];
-            m += distance[i] <= bound2;
-        }
+        const std::size_t m = detail::keep_within(parent, parent_index, n, distance_.data(), bound2, kept.x.data(),
+                                                  kept.y.data(), kept.z.data(), kept.index.data());
         kept.count = m;
 
         if (m == 1) {

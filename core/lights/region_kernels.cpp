@@ -46,6 +46,20 @@ constexpr std::array<double, asin2_terms> asin2_series = [] {
     return a;
 }();
 
+// compress_order[b]: the positions of the set bits of b, lowest first, then
+// zeros: the lane order that moves a vector's kept lanes (mask bits b) to its
+// front. A table at namespace scope: Highway 1.0.3's Compress of 64-bit
+// lanes copies its own 2 KB table onto the stack on every call.
+constexpr std::array<std::array<std::int64_t, 8>, 256> compress_order = [] {
+    std::array<std::array<std::int64_t, 8>, 256> t{};
+    for (int b = 0; b < 256; ++b) {
+        int m = 0;
+        for (int k = 0; k < 8; ++k)
+            if (b & (1 << k)) t[std::size_t(b)][std::size_t(m++)] = k;
+    }
+    return t;
+}();
+
 }  // namespace penumbra::lights::detail
 #endif
 
@@ -124,14 +138,51 @@ double chord2_to(Points p, std::size_t n, double cx, double cy, double cz, doubl
     return m;
 }
 
+std::size_t keep_within(Points from, const int* index, std::size_t n, const double* distance, double bound2,
+                        double* x, double* y, double* z, int* kept) {
+    namespace hn = hwy::HWY_NAMESPACE;
+    const hn::ScalableTag<double> d;
+    const hn::Rebind<int32_t, decltype(d)> d32;
+    const std::size_t lanes = hn::Lanes(d);
+    const auto limit = hn::Set(d, bound2);
+    std::size_t m = 0, i = 0;
+    // Whole vectors: the kept lanes moved to the front in order, the whole
+    // vector stored at m (m <= i: within the first n entries of the output).
+    static_assert(hn::MaxLanes(d) <= 8, "compress_order covers up to 8 lanes");
+    for (; i + lanes <= n; i += lanes) {
+        const auto keep = hn::Le(hn::LoadU(d, distance + i), limit);
+        std::uint8_t bits[8] = {};
+        hn::StoreMaskBits(d, keep, bits);
+        const auto order = hn::SetTableIndices(d, compress_order[bits[0]].data());
+        hn::StoreU(hn::TableLookupLanes(hn::LoadU(d, from.x + i), order), d, x + m);
+        hn::StoreU(hn::TableLookupLanes(hn::LoadU(d, from.y + i), order), d, y + m);
+        hn::StoreU(hn::TableLookupLanes(hn::LoadU(d, from.z + i), order), d, z + m);
+        const auto site = hn::PromoteTo(d, hn::LoadU(d32, index + i));  // exact: |index| < 2^31
+        hn::StoreU(hn::DemoteTo(d32, hn::TableLookupLanes(site, order)), d32, kept + m);
+        m += std::size_t(__builtin_popcount(bits[0]));
+    }
+    // The rest one by one: each written, overwritten by the next unless kept.
+    for (; i < n; ++i) {
+        kept[m] = index[i];
+        x[m] = from.x[i];
+        y[m] = from.y[i];
+        z[m] = from.z[i];
+        m += distance[i] <= bound2;
+    }
+    return m;
+}
+
 // kV lane vectors of cells from `first` on against every candidate: each
 // candidate's coordinates are loaded once for all of them, and the kV
 // running minima are independent chains, so the loop is not held up by the
-// latency of one compare-and-select chain.
+// latency of one compare-and-select chain. The loops over the vectors are
+// unrolled by hand (the pragmas), so the arrays live in registers: left as
+// loops, GCC kept them on the stack.
 template <int kV>
 [[gnu::always_inline]] inline void nearest_vectors(Points candidates, const int* index, std::size_t count, Points cells,
                                                    std::size_t cells_count, std::size_t first, int* nearest) {
     VecD x[kV], y[kV], z[kV], best[kV], best_index[kV];
+#pragma GCC unroll 4
     for (int v = 0; v < kV; ++v) {
         const std::size_t j = first + std::size_t(v) * kLanes;
         x[v] = load(cells.x, j, cells_count);
@@ -144,6 +195,7 @@ template <int kV>
     for (std::size_t i = 0; i < count; ++i) {
         const double sx = candidates.x[i], sy = candidates.y[i], sz = candidates.z[i];
         const VecD id = splat(double(index[i]));
+#pragma GCC unroll 4
         for (int v = 0; v < kV; ++v) {
             const VecD dx = sx - x[v], dy = sy - y[v], dz = sz - z[v];
             const VecD d2 = (dx * dx + dy * dy) + dz * dz;
@@ -152,6 +204,7 @@ template <int kV>
             best_index[v] = nearer ? id : best_index[v];
         }
     }
+#pragma GCC unroll 4
     for (int v = 0; v < kV; ++v) {
         const std::size_t j = first + std::size_t(v) * kLanes;
         for (int k = 0; k < kLanes && j + std::size_t(k) < cells_count; ++k)
@@ -285,12 +338,18 @@ HWY_AFTER_NAMESPACE();
 namespace penumbra::lights::detail {
 
 HWY_EXPORT(chord2_to);
+HWY_EXPORT(keep_within);
 HWY_EXPORT(nearest_candidates);
 HWY_EXPORT(weighted_squared_angles);
 HWY_EXPORT(run_sums);
 
 double chord2_to(Points p, std::size_t n, double cx, double cy, double cz, double* out) {
     return HWY_DYNAMIC_DISPATCH(chord2_to)(p, n, cx, cy, cz, out);
+}
+
+std::size_t keep_within(Points from, const int* index, std::size_t n, const double* distance, double bound2,
+                        double* x, double* y, double* z, int* kept) {
+    return HWY_DYNAMIC_DISPATCH(keep_within)(from, index, n, distance, bound2, x, y, z, kept);
 }
 
 void nearest_candidates(Points candidates, const int* index, std::size_t count, Points cells, std::size_t cells_count,

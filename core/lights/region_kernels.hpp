@@ -24,6 +24,11 @@ struct Points {
 // out[i] = chord2(p_i, c) for i < n; returns the smallest (+inf for n = 0).
 double chord2_to(Points p, std::size_t n, double cx, double cy, double cz, double* out);
 
+// The points i < n with distance[i] <= bound2, in order, with their index,
+// written to x, y, z and kept (each with room for n); returns how many.
+std::size_t keep_within(Points from, const int* index, std::size_t n, const double* distance, double bound2,
+                        double* x, double* y, double* z, int* kept);
+
 // For each of `cells` points, the lowest `index` among the `candidates`
 // points at the smallest chord2 from it (candidates in ascending index).
 void nearest_candidates(Points candidates, const int* index, std::size_t count, Points cells, std::size_t cells_count,
