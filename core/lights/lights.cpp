@@ -142,7 +142,7 @@ bool black(const float* p) { return p[0] <= 0.0f && p[1] <= 0.0f && p[2] <= 0.0f
 // not sanitized (negative values), where adding everything would not do.
 detail::RunSums lit_cell_sums(const EnvironmentMap& map, const LuminanceDistribution& dist, const LatLongGrid& grid,
                               int r, int c0, int c1) {
-    detail::RunSums s{{0.0, 0.0, 0.0}, 0.0, 0.0, 0.0, 0, true};
+    detail::RunSums s{{0.0, 0.0, 0.0}, 0.0, 0.0, 0.0, false, true};
     for (int c = c0; c < c1; ++c) {
         const float* p = map.pixel(r, c);
         if (black(p)) continue;
@@ -171,7 +171,7 @@ void sum_rows(const EnvironmentMap& map, const LuminanceDistribution& dist, cons
             while (end < map.width && row[end] == k) ++end;
             detail::RunSums s = detail::run_sums(row_run(map, dist, grid, r, c, end));
             // A black cell belongs to no light; every black cell has weight 0.
-            const bool maybe_black = s.zero_weight > 0 || s.negative;
+            const bool maybe_black = s.unweighted || s.negative;
             if (s.negative) s = lit_cell_sums(map, dist, grid, r, c, end);
             out.push_back({{r, c, end, k}, omega * Eigen::Vector3d(s.rgb[0], s.rgb[1], s.rgb[2]),
                            Eigen::Vector3d(st * s.w_cos, st * s.w_sin, ct * s.w), s.w});

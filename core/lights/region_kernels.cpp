@@ -287,15 +287,16 @@ struct CellSums {
     Vec4D rgb{}, weight{};
 };
 
-// Cell j; `f` = its four floats from R on (the fourth is the next cell's R,
-// left out of everything below).
+// Cell j; `f` = its four floats from R on, the fourth the next cell's R:
+// left out of the sums and, unless `next_in_run`, of the lowest value.
+template <bool next_in_run>
 [[gnu::always_inline]] inline void add_cell(const RowRun& run, std::size_t j, Vec4F f, CellSums& sums, Vec4F& lowest,
-                                            std::size_t& zeros) {
-    const Vec4F rgb = __builtin_shuffle(f, Mask4F{0, 1, 2, 2});  // B again in place of the next cell's R
+                                            double& lowest_weight) {
+    const Vec4F rgb = next_in_run ? f : __builtin_shuffle(f, Mask4F{0, 1, 2, 2});  // B again for the next R
     lowest = rgb < lowest ? rgb : lowest;
     sums.rgb += __builtin_convertvector(f, Vec4D);
     const double w = run.weight[j];
-    zeros += w == 0.0;
+    lowest_weight = std::min(lowest_weight, w);
     sums.weight += Vec4D{w, w * run.cos_phi[j], w * run.sin_phi[j], 0.0};
 }
 
@@ -306,29 +307,31 @@ RunSums run_sums(const RowRun& run) {
     const std::size_t loadable = std::min(n, run.readable - 1);
     CellSums even, odd;
     Vec4F lowest = {0.0f, 0.0f, 0.0f, 0.0f};
-    std::size_t zeros = 0, j = 0;
+    double lowest_weight = std::numeric_limits<double>::infinity();
+    std::size_t j = 0;
     auto cell = [&](std::size_t k) {
         Vec4F f;
         std::memcpy(&f, run.rgb + 3 * k, sizeof f);
         return f;
     };
-    for (; j + 2 <= loadable; j += 2) {
-        add_cell(run, j, cell(j), even, lowest, zeros);
-        add_cell(run, j + 1, cell(j + 1), odd, lowest, zeros);
+    // Pairs of cells followed by another of the run (so every load is in the map).
+    for (; j + 3 <= n; j += 2) {
+        add_cell<true>(run, j, cell(j), even, lowest, lowest_weight);
+        add_cell<true>(run, j + 1, cell(j + 1), odd, lowest, lowest_weight);
     }
     for (; j < n; ++j) {
         Vec4F f = {0.0f, 0.0f, 0.0f, 0.0f};
         if (j < loadable) f = cell(j);
         else std::memcpy(&f, run.rgb + 3 * j, 3 * sizeof(float));
-        add_cell(run, j, f, j % 2 == 0 ? even : odd, lowest, zeros);
+        add_cell<false>(run, j, f, j % 2 == 0 ? even : odd, lowest, lowest_weight);
     }
     const Vec4D rgb = even.rgb + odd.rgb, weight = even.weight + odd.weight;
     return {{rgb[0], rgb[1], rgb[2]},
             weight[0],
             weight[1],
             weight[2],
-            zeros,
-            lowest[0] < 0.0f || lowest[1] < 0.0f || lowest[2] < 0.0f};
+            lowest_weight <= 0.0,
+            lowest[0] < 0.0f || lowest[1] < 0.0f || lowest[2] < 0.0f || lowest[3] < 0.0f};
 }
 
 }  // namespace penumbra::lights::detail::HWY_NAMESPACE

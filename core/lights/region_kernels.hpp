@@ -57,13 +57,14 @@ struct RowRun {
 // `out` must be readable and writable kMaxLanes past run.cells.
 void weighted_squared_angles(const RowRun& run, Points lights, double* out);
 
-// Over the run: Σ RGB, Σ w, Σ w cos φ, Σ w sin φ, how many cells have w = 0
-// (every black cell does), and whether any value is negative (never in a
-// sanitized map: then the black cells, all zeros, added nothing).
+// Over the run: Σ RGB, Σ w, Σ w cos φ, Σ w sin φ, whether some cell has
+// w <= 0 (every black cell has w = 0; weights are never negative), and
+// whether any value is negative (never in a sanitized map: then the black
+// cells, all zeros, added nothing).
 struct RunSums {
     double rgb[3];
     double w, w_cos, w_sin;
-    std::size_t zero_weight;
+    bool unweighted;
     bool negative;
 };
 RunSums run_sums(const RowRun& run);
