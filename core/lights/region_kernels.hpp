@@ -6,8 +6,9 @@
 // Every per-cell value is computed lane by lane in the same arithmetic on
 // every target (region_kernels.cpp is compiled without floating-point
 // contraction), so the nearest-site decisions are bit-identical to chord2()
-// (region_assignment.hpp) whatever the target. The sums add in lanes: their
-// last bits depend on the target's lane count.
+// (region_assignment.hpp) whatever the target. A run's sums add cell by
+// cell in 4-lane vectors, whatever the target's width, so they too are the
+// same on every target.
 #pragma once
 
 #include <cstddef>
