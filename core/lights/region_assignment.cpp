@@ -1,8 +1,10 @@
 #include "lights/region_assignment.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 
 #include "common/error.hpp"
@@ -63,18 +65,20 @@ namespace {
 
 // A block's candidates: site indices (ascending) and their coordinates side
 // by side, so the loops over them run on whole SIMD registers. The storage
-// only grows; `count` says how much of it is in use.
+// only grows, in powers of two, and is never copied or cleared (every block
+// writes what it uses): `count` says how much of it is in use.
 struct Candidates {
-    std::vector<int> index;
-    std::vector<double> x, y, z;
-    std::size_t count = 0;
-    detail::Points points() const { return {x.data(), y.data(), z.data()}; }
+    std::unique_ptr<int[]> index;
+    std::unique_ptr<double[]> x, y, z;
+    std::size_t capacity = 0, count = 0;
+    detail::Points points() const { return {x.get(), y.get(), z.get()}; }
     void reserve(std::size_t n) {
-        if (index.size() >= n) return;
-        index.resize(n);
-        x.resize(n);
-        y.resize(n);
-        z.resize(n);
+        if (capacity >= n) return;
+        capacity = std::bit_ceil(std::max<std::size_t>(n, 64));
+        index = std::make_unique_for_overwrite<int[]>(capacity);
+        x = std::make_unique_for_overwrite<double[]>(capacity);
+        y = std::make_unique_for_overwrite<double[]>(capacity);
+        z = std::make_unique_for_overwrite<double[]>(capacity);
     }
 };
 
@@ -109,7 +113,7 @@ public:
             root_.y[k] = sites_.y_[i];
             root_.z[k] = sites_.z_[i];
         }
-        block(r0, r1, c0, c1, root_.points(), root_.index.data(), root_.count, 0);
+        block(r0, r1, c0, c1, root_.points(), root_.index.get(), root_.count, 0);
     }
 
 private:
@@ -141,8 +145,8 @@ private:
         const double bound2 = bound * bound;
         Candidates& kept = levels_[depth];
         kept.reserve(n);
-        const std::size_t m = detail::keep_within(parent, parent_index, n, distance_.data(), bound2, kept.x.data(),
-                                                  kept.y.data(), kept.z.data(), kept.index.data());
+        const std::size_t m = detail::keep_within(parent, parent_index, n, distance_.data(), bound2, kept.x.get(),
+                                                  kept.y.get(), kept.z.get(), kept.index.get());
         kept.count = m;
 
         if (m == 1) {
@@ -157,12 +161,12 @@ private:
         const double wide = columns * column_angle_ * widest_sine(r0, r1);
         if (columns == 1 || (rows > 1 && tall >= wide)) {
             const int rm = r0 + rows / 2;
-            block(r0, rm, c0, c1, kept.points(), kept.index.data(), m, depth + 1);
-            block(rm, r1, c0, c1, kept.points(), kept.index.data(), m, depth + 1);
+            block(r0, rm, c0, c1, kept.points(), kept.index.get(), m, depth + 1);
+            block(rm, r1, c0, c1, kept.points(), kept.index.get(), m, depth + 1);
         } else {
             const int half = c0 + columns / 2;
-            block(r0, r1, c0, half, kept.points(), kept.index.data(), m, depth + 1);
-            block(r0, r1, half, c1, kept.points(), kept.index.data(), m, depth + 1);
+            block(r0, r1, c0, half, kept.points(), kept.index.get(), m, depth + 1);
+            block(r0, r1, half, c1, kept.points(), kept.index.get(), m, depth + 1);
         }
     }
 
@@ -188,7 +192,7 @@ private:
                 cz_[j + k] = ct;
             }
         }
-        detail::nearest_candidates(candidates.points(), candidates.index.data(), candidates.count,
+        detail::nearest_candidates(candidates.points(), candidates.index.get(), candidates.count,
                                    {cx_.data(), cy_.data(), cz_.data()}, count, nearest_.data());
         for (int r = r0; r < r1; ++r) std::copy_n(nearest_.data() + std::size_t(r - r0) * w, w, cell(r, c0));
     }
