@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
+#include <mutex>
 #include <numbers>
 #include <string>
 #include <utility>
@@ -90,10 +92,26 @@ struct CellRun {
 struct Regions {
     std::vector<Eigen::Vector3d> rgb, moment;
     std::vector<double> y;
-    std::vector<int> owner;
+    std::unique_ptr<int[]> owner;  // every cell written by the assignment: not zeroed first
     std::vector<CellRun> runs;
-    LatLongGrid grid{0, 0, 0.0};  // the map's cell centres
+    std::vector<std::size_t> row_runs;  // runs[row_runs[r] ..] are row r's (height + 1 entries)
+    std::shared_ptr<const LatLongGrid> grid;  // the map's cell centres
 };
+
+// The cell centres of `map`'s grid. The frames of a video share one grid, so
+// the last one is kept: its 2(W + H) sines and cosines cost a few per cent
+// of the region step at 360x90.
+std::shared_ptr<const LatLongGrid> cell_centres(const EnvironmentMap& map) {
+    static std::mutex mutex;
+    static std::shared_ptr<const LatLongGrid> last;
+    static double last_theta_max = 0.0;
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (!last || last->width != map.width || last->height != map.height || last_theta_max != map.theta_max()) {
+        last = std::make_shared<const LatLongGrid>(map.width, map.height, map.theta_max());
+        last_theta_max = map.theta_max();
+    }
+    return last;
+}
 
 // One run of neighbouring cells of a row going to the same light: its share
 // of Σ L Ω, Σ Y·Ω·ω and Σ Y·Ω. Ω and θ are the row's, so only φ varies along
@@ -124,7 +142,7 @@ bool black(const float* p) { return p[0] <= 0.0f && p[1] <= 0.0f && p[2] <= 0.0f
 // not sanitized (negative values), where adding everything would not do.
 detail::RunSums lit_cell_sums(const EnvironmentMap& map, const LuminanceDistribution& dist, const LatLongGrid& grid,
                               int r, int c0, int c1) {
-    detail::RunSums s{{0.0, 0.0, 0.0}, 0.0, 0.0, 0.0, 0, true};
+    detail::RunSums s{{0.0, 0.0, 0.0}, 0.0, 0.0, 0.0, false, true};
     for (int c = c0; c < c1; ++c) {
         const float* p = map.pixel(r, c);
         if (black(p)) continue;
@@ -153,7 +171,7 @@ void sum_rows(const EnvironmentMap& map, const LuminanceDistribution& dist, cons
             while (end < map.width && row[end] == k) ++end;
             detail::RunSums s = detail::run_sums(row_run(map, dist, grid, r, c, end));
             // A black cell belongs to no light; every black cell has weight 0.
-            const bool maybe_black = s.zero_weight > 0 || s.negative;
+            const bool maybe_black = s.unweighted || s.negative;
             if (s.negative) s = lit_cell_sums(map, dist, grid, r, c, end);
             out.push_back({{r, c, end, k}, omega * Eigen::Vector3d(s.rgb[0], s.rgb[1], s.rgb[2]),
                            Eigen::Vector3d(st * s.w_cos, st * s.w_sin, ct * s.w), s.w});
@@ -178,15 +196,17 @@ Regions gather_regions(const EnvironmentMap& map, const LuminanceDistribution& d
     Regions total{std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero()),
                   std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero()),
                   std::vector<double>(n, 0.0),
-                  std::vector<int>(std::size_t(map.width) * map.height),
+                  std::unique_ptr<int[]>(new int[std::size_t(map.width) * map.height]),
                   {},
-                  LatLongGrid(map.width, map.height, map.theta_max())};
-    const LatLongGrid& grid = total.grid;
+                  std::vector<std::size_t>(std::size_t(map.height) + 1, 0),
+                  cell_centres(map)};
+    const LatLongGrid& grid = *total.grid;
     std::vector<std::vector<RunSum>> runs(block_count(std::size_t(map.height), rows.block));
     parallel_blocks(std::size_t(map.height), rows, [&](std::size_t block, std::size_t b, std::size_t e) {
-        int* owner = total.owner.data() + b * std::size_t(map.width);
+        int* owner = total.owner.get() + b * std::size_t(map.width);
         assign_nearest(grid, sites, int(b), int(e), owner);
-        sum_rows(map, dist, grid, int(b), int(e), total.owner.data(), runs[block]);
+        runs[block].reserve((e - b) * 32);  // about as many runs per row as at 360x90 with 300 lights
+        sum_rows(map, dist, grid, int(b), int(e), total.owner.get(), runs[block]);
     });
     std::size_t count = 0;
     for (const auto& block : runs) count += block.size();
@@ -197,28 +217,49 @@ Regions gather_regions(const EnvironmentMap& map, const LuminanceDistribution& d
             total.rgb[k] += sum.rgb;
             total.moment[k] += sum.moment;
             total.y[k] += sum.y;
+            if (sum.run.begin == 0) total.row_runs[std::size_t(sum.run.row)] = total.runs.size();
             total.runs.push_back(sum.run);
         }
+    total.row_runs[std::size_t(map.height)] = total.runs.size();
     return total;
 }
 
-// Spread: RMS angle of each region about its light's direction (θ² on SIMD
-// lanes, region_kernels.hpp), one sum per run of cells in parallel, added
-// in run order (black cells have weight 0 and add nothing).
+// Spread: RMS angle of each region about its light's direction. Row by row
+// in parallel (w θ² per cell on SIMD lanes, region_kernels.hpp, each cell
+// against its run's light), summed per run in cell order; the runs' sums
+// are then added in run order (black cells have weight 0 and add nothing).
 void region_spread(const EnvironmentMap& map, const LuminanceDistribution& dist, const Regions& regions,
                    const ParallelOptions& rows, FrameLights& out) {
     const int n = int(out.lights.size());
-    const LatLongGrid& grid = regions.grid;
+    const LatLongGrid& grid = *regions.grid;
     std::vector<double> run_sum(regions.runs.size());
-    ParallelOptions spread_runs = rows;
-    spread_runs.stage = "lights.region_spread";
-    spread_runs.block = 1024;
-    parallel_for(regions.runs.size(), spread_runs, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) {
-            const CellRun& run = regions.runs[i];
-            const Eigen::Vector3d& l = out.lights[std::size_t(run.light)].direction;
-            run_sum[i] = detail::weighted_squared_angles(row_run(map, dist, grid, run.row, run.begin, run.end), l.x(),
-                                                         l.y(), l.z());
+    ParallelOptions spread_rows = rows;
+    spread_rows.stage = "lights.region_spread";
+    parallel_for(std::size_t(map.height), spread_rows, [&](std::size_t b, std::size_t e) {
+        // The row's lights per cell, and w θ² per cell; padded for whole SIMD loads and stores.
+        const std::size_t padded = std::size_t(map.width) + detail::kMaxLanes;
+        std::vector<double> lx(padded, 0.0), ly(padded, 0.0), lz(padded, 0.0), value(padded);
+        for (std::size_t r = b; r < e; ++r) {
+            const std::size_t first = regions.row_runs[r], last = regions.row_runs[r + 1];
+            for (std::size_t i = first; i < last; ++i) {
+                const CellRun& run = regions.runs[i];
+                const Eigen::Vector3d& l = out.lights[std::size_t(run.light)].direction;
+                std::fill(lx.begin() + run.begin, lx.begin() + run.end, l.x());
+                std::fill(ly.begin() + run.begin, ly.begin() + run.end, l.y());
+                std::fill(lz.begin() + run.begin, lz.begin() + run.end, l.z());
+            }
+            detail::weighted_squared_angles(row_run(map, dist, grid, int(r), 0, map.width),
+                                            {lx.data(), ly.data(), lz.data()}, value.data());
+            for (std::size_t i = first; i < last; ++i) {
+                const CellRun& run = regions.runs[i];
+                // Four partial sums: one chain of dependent adds would cost more than the rest of the pass.
+                double sum[4] = {0.0, 0.0, 0.0, 0.0};
+                int c = run.begin;
+                for (; c + 4 <= run.end; c += 4)
+                    for (int k = 0; k < 4; ++k) sum[k] += value[std::size_t(c + k)];
+                for (; c < run.end; ++c) sum[0] += value[std::size_t(c)];
+                run_sum[i] = (sum[0] + sum[1]) + (sum[2] + sum[3]);
+            }
         }
     });
     std::vector<double> second(n, 0.0);

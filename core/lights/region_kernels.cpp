@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <utility>
 
 #include "lights/region_kernels.hpp"
 
@@ -45,6 +46,20 @@ constexpr std::array<double, asin2_terms> asin2_series = [] {
     return a;
 }();
 
+// compress_order[b]: the positions of the set bits of b, lowest first, then
+// zeros: the lane order that moves a vector's kept lanes (mask bits b) to its
+// front. A table at namespace scope: Highway 1.0.3's Compress of 64-bit
+// lanes copies its own 2 KB table onto the stack on every call.
+constexpr std::array<std::array<std::int64_t, 8>, 256> compress_order = [] {
+    std::array<std::array<std::int64_t, 8>, 256> t{};
+    for (int b = 0; b < 256; ++b) {
+        int m = 0;
+        for (int k = 0; k < 8; ++k)
+            if (b & (1 << k)) t[std::size_t(b)][std::size_t(m++)] = k;
+    }
+    return t;
+}();
+
 }  // namespace penumbra::lights::detail
 #endif
 
@@ -62,11 +77,13 @@ constexpr int kLanes = HWY_LANES(double);
 typedef double VecD __attribute__((vector_size(kLanes * sizeof(double))));
 typedef long long MaskD __attribute__((vector_size(kLanes * sizeof(double))));
 
-inline VecD splat(double value) {
-    VecD v{};
-    for (int k = 0; k < kLanes; ++k) v[k] = value;
-    return v;
+// Written as one initializer of equal elements, which GCC emits as a single
+// broadcast (a loop of lane stores became one masked insert per lane).
+template <std::size_t... I>
+inline VecD splat_lanes(double value, std::index_sequence<I...>) {
+    return VecD{((void)I, value)...};
 }
+inline VecD splat(double value) { return splat_lanes(value, std::make_index_sequence<kLanes>{}); }
 
 inline bool any(const MaskD& m) {
     long long a = 0;
@@ -121,21 +138,95 @@ double chord2_to(Points p, std::size_t n, double cx, double cy, double cz, doubl
     return m;
 }
 
+std::size_t keep_within(Points from, const int* index, std::size_t n, const double* distance, double bound2,
+                        double* x, double* y, double* z, int* kept) {
+    namespace hn = hwy::HWY_NAMESPACE;
+    const hn::ScalableTag<double> d;
+    const hn::Rebind<int32_t, decltype(d)> d32;
+    const std::size_t lanes = hn::Lanes(d);
+    const auto limit = hn::Set(d, bound2);
+    std::size_t m = 0, i = 0;
+    // Whole vectors: the kept lanes moved to the front in order, the whole
+    // vector stored at m (m <= i: within the first n entries of the output).
+    static_assert(hn::MaxLanes(d) <= 8, "compress_order covers up to 8 lanes");
+    for (; i + lanes <= n; i += lanes) {
+        const auto keep = hn::Le(hn::LoadU(d, distance + i), limit);
+        std::uint8_t bits[8] = {};
+        hn::StoreMaskBits(d, keep, bits);
+        const auto order = hn::SetTableIndices(d, compress_order[bits[0]].data());
+        hn::StoreU(hn::TableLookupLanes(hn::LoadU(d, from.x + i), order), d, x + m);
+        hn::StoreU(hn::TableLookupLanes(hn::LoadU(d, from.y + i), order), d, y + m);
+        hn::StoreU(hn::TableLookupLanes(hn::LoadU(d, from.z + i), order), d, z + m);
+        const auto site = hn::PromoteTo(d, hn::LoadU(d32, index + i));  // exact: |index| < 2^31
+        hn::StoreU(hn::DemoteTo(d32, hn::TableLookupLanes(site, order)), d32, kept + m);
+        m += std::size_t(__builtin_popcount(bits[0]));
+    }
+    // The rest one by one: each written, overwritten by the next unless kept.
+    for (; i < n; ++i) {
+        kept[m] = index[i];
+        x[m] = from.x[i];
+        y[m] = from.y[i];
+        z[m] = from.z[i];
+        m += distance[i] <= bound2;
+    }
+    return m;
+}
+
+// kV lane vectors of cells from `first` on against every candidate: each
+// candidate's coordinates are loaded once for all of them, and the kV
+// running minima are independent chains, so the loop is not held up by the
+// latency of one compare-and-select chain. The loops over the vectors are
+// unrolled by hand (the pragmas), so the arrays live in registers: left as
+// loops, GCC kept them on the stack.
+template <int kV>
+[[gnu::always_inline]] inline void nearest_vectors(Points candidates, const int* index, std::size_t count, Points cells,
+                                                   std::size_t cells_count, std::size_t first, int* nearest) {
+    VecD x[kV], y[kV], z[kV], best[kV], best_index[kV];
+#pragma GCC unroll 4
+    for (int v = 0; v < kV; ++v) {
+        const std::size_t j = first + std::size_t(v) * kLanes;
+        x[v] = load(cells.x, j, cells_count);
+        y[v] = load(cells.y, j, cells_count);
+        z[v] = load(cells.z, j, cells_count);
+        best[v] = splat(std::numeric_limits<double>::infinity());
+        best_index[v] = splat(-1.0);
+    }
+    // Ascending candidates and a strict <: the lowest index wins a tie.
+    for (std::size_t i = 0; i < count; ++i) {
+        const double sx = candidates.x[i], sy = candidates.y[i], sz = candidates.z[i];
+        const VecD id = splat(double(index[i]));
+#pragma GCC unroll 4
+        for (int v = 0; v < kV; ++v) {
+            const VecD dx = sx - x[v], dy = sy - y[v], dz = sz - z[v];
+            const VecD d2 = (dx * dx + dy * dy) + dz * dz;
+            const MaskD nearer = d2 < best[v];
+            best[v] = nearer ? d2 : best[v];
+            best_index[v] = nearer ? id : best_index[v];
+        }
+    }
+#pragma GCC unroll 4
+    for (int v = 0; v < kV; ++v) {
+        const std::size_t j = first + std::size_t(v) * kLanes;
+        for (int k = 0; k < kLanes && j + std::size_t(k) < cells_count; ++k)
+            nearest[j + std::size_t(k)] = int(best_index[v][k]);
+    }
+}
+
 void nearest_candidates(Points candidates, const int* index, std::size_t count, Points cells, std::size_t cells_count,
                         int* nearest) {
-    for (std::size_t j = 0; j < cells_count; j += kLanes) {
-        const VecD x = load(cells.x, j, cells_count), y = load(cells.y, j, cells_count), z = load(cells.z, j, cells_count);
-        VecD best = splat(std::numeric_limits<double>::infinity());
-        VecD best_index = splat(-1.0);
-        // Ascending candidates and a strict <: the lowest index wins a tie.
-        for (std::size_t i = 0; i < count; ++i) {
-            const VecD dx = candidates.x[i] - x, dy = candidates.y[i] - y, dz = candidates.z[i] - z;
-            const VecD d2 = (dx * dx + dy * dy) + dz * dz;
-            const MaskD nearer = d2 < best;
-            best = nearer ? d2 : best;
-            best_index = nearer ? splat(double(index[i])) : best_index;
-        }
-        for (int k = 0; k < kLanes && j + std::size_t(k) < cells_count; ++k) nearest[j + std::size_t(k)] = int(best_index[k]);
+    // Four lane vectors at a time where the registers hold them (AVX-512 has
+    // 32), two elsewhere; then what is left.
+    constexpr int kWide = kLanes >= 8 ? 4 : 2;
+    std::size_t j = 0;
+    for (; j + kWide * kLanes <= cells_count; j += kWide * kLanes)
+        nearest_vectors<kWide>(candidates, index, count, cells, cells_count, j, nearest);
+    const std::size_t left = (cells_count - j + kLanes - 1) / kLanes;
+    switch (left) {
+        case 4: return nearest_vectors<4>(candidates, index, count, cells, cells_count, j, nearest);
+        case 3: return nearest_vectors<3>(candidates, index, count, cells, cells_count, j, nearest);
+        case 2: return nearest_vectors<2>(candidates, index, count, cells, cells_count, j, nearest);
+        case 1: return nearest_vectors<1>(candidates, index, count, cells, cells_count, j, nearest);
+        default: return;  // none left
     }
 }
 
@@ -153,123 +244,94 @@ inline double squared_angle(double x, double y, double z, double lx, double ly, 
     return angle * angle;
 }
 
-double weighted_squared_angles(const RowRun& run, double lx, double ly, double lz) {
-    const double st = run.sin_theta, ct = run.cos_theta, dz = ct - lz, dz2 = dz * dz;
+void weighted_squared_angles(const RowRun& run, Points lights, double* out) {
+    const double st = run.sin_theta, ct = run.cos_theta;
     const std::size_t n = run.cells;
-    VecD sum{};
     for (std::size_t j = 0; j < n; j += kLanes) {
-        VecD cos_lanes, sin_lanes;  // the grid's tables are padded: whole loads
+        VecD cos_lanes, sin_lanes, lx, ly, lz;  // the tables are padded: whole loads
         std::memcpy(&cos_lanes, run.cos_phi + j, sizeof cos_lanes);
         std::memcpy(&sin_lanes, run.sin_phi + j, sizeof sin_lanes);
-        const VecD dx = st * cos_lanes - lx, dy = st * sin_lanes - ly;
-        const VecD u = 0.25 * ((dx * dx + dy * dy) + dz2);
-        const VecD weight = load_masked(run.weight, j, n, run.readable);  // 0 past the run
+        std::memcpy(&lx, lights.x + j, sizeof lx);
+        std::memcpy(&ly, lights.y + j, sizeof ly);
+        std::memcpy(&lz, lights.z + j, sizeof lz);
+        const VecD dx = st * cos_lanes - lx, dy = st * sin_lanes - ly, dz = ct - lz;
+        const VecD u = 0.25 * ((dx * dx + dy * dy) + dz * dz);
+        const VecD weight = load_masked(run.weight, j, n, run.readable);  // 0 past the row
+        VecD t;
         if (!any(u > 1.0 / 64.0)) {
-            sum += weight * asin2_sum<8>(u);
-            continue;
-        }
-        VecD t = asin2_sum<asin2_terms>(u);
-        const MaskD wide = u > 1.0 / 16.0;
-        if (any(wide))
-            for (int k = 0; k < kLanes; ++k)
-                if (wide[k]) t[k] = squared_angle(st * cos_lanes[k], st * sin_lanes[k], ct, lx, ly, lz);
-        sum += weight * t;
-    }
-    double total = 0.0;
-    for (int k = 0; k < kLanes; ++k) total += sum[k];
-    return total;
-}
-
-typedef float VecF __attribute__((vector_size(kLanes * sizeof(float))));
-
-// 3·kLanes floats into three lane vectors (lane e of vector i: float
-// kLanes·i + e of the chunk), tracking the lowest value.
-struct FloatSums {
-    VecD a0{}, a1{}, a2{};
-    VecF lowest{};
-};
-[[gnu::always_inline]] inline void add_chunk(const float* f, FloatSums& s) {
-    VecF v0, v1, v2;
-    std::memcpy(&v0, f, sizeof v0);
-    std::memcpy(&v1, f + kLanes, sizeof v1);
-    std::memcpy(&v2, f + 2 * kLanes, sizeof v2);
-    s.lowest = v0 < s.lowest ? v0 : s.lowest;
-    s.lowest = v1 < s.lowest ? v1 : s.lowest;
-    s.lowest = v2 < s.lowest ? v2 : s.lowest;
-    s.a0 += __builtin_convertvector(v0, VecD);
-    s.a1 += __builtin_convertvector(v1, VecD);
-    s.a2 += __builtin_convertvector(v2, VecD);
-}
-
-// kLanes cells' weight, w cos φ and w sin φ, and which weights are 0.
-struct WeightSums {
-    VecD w{}, c{}, s{};
-    MaskD zero{};
-};
-[[gnu::always_inline]] inline void add_cells(const double* w, const double* c, const double* s, WeightSums& sums) {
-    VecD weight, cv, sv;
-    std::memcpy(&weight, w, sizeof weight);
-    std::memcpy(&cv, c, sizeof cv);
-    std::memcpy(&sv, s, sizeof sv);
-    sums.zero -= weight == 0.0;  // a true lane is −1
-    sums.w += weight;
-    sums.c += weight * cv;
-    sums.s += weight * sv;
-}
-
-// The RGB floats are summed as one flat array, 3·kLanes at a time, so no lane
-// needs to gather a pixel: lane e of vector i holds channel (kLanes·i + e) mod 3.
-// Past the run's end lanes hold zeros, which add nothing.
-RunSums run_sums(const RowRun& run) {
-    typedef int IntF __attribute__((vector_size(kLanes * sizeof(float))));
-    const std::size_t n = run.cells;
-    FloatSums f;
-    WeightSums ws;
-    std::size_t j = 0;
-    for (; j + kLanes <= n; j += kLanes) {
-        add_chunk(run.rgb + 3 * j, f);
-        add_cells(run.weight + j, run.cos_phi + j, run.sin_phi + j, ws);
-    }
-    std::size_t padding = 0;
-    if (j < n) {
-        float tail[3 * kLanes] = {};
-        double tw[kLanes] = {};
-        const int floats = int(3 * (n - j));
-        if (j + kLanes <= run.readable) {
-            std::memcpy(tail, run.rgb + 3 * j, sizeof tail);
-            std::memcpy(tw, run.weight + j, sizeof tw);
-            IntF lane{};
-            for (int k = 0; k < kLanes; ++k) lane[k] = k;
-            for (int v = 0; v < 3; ++v) {
-                VecF x;
-                std::memcpy(&x, tail + v * kLanes, sizeof x);
-                x = lane + v * kLanes < floats ? x : VecF{};
-                std::memcpy(tail + v * kLanes, &x, sizeof x);
-            }
-            for (int k = 0; k < kLanes; ++k)
-                if (j + std::size_t(k) >= n) tw[k] = 0.0;
+            t = asin2_sum<8>(u);
         } else {
-            for (int k = 0; k < floats; ++k) tail[k] = run.rgb[3 * j + std::size_t(k)];
-            for (std::size_t k = j; k < n; ++k) tw[k - j] = run.weight[k];
+            t = asin2_sum<asin2_terms>(u);
+            const MaskD wide = u > 1.0 / 16.0;
+            if (any(wide))
+                for (int k = 0; k < kLanes; ++k)
+                    if (wide[k])
+                        t[k] = squared_angle(st * cos_lanes[k], st * sin_lanes[k], ct, lx[k], ly[k], lz[k]);
         }
-        add_chunk(tail, f);
-        add_cells(tw, run.cos_phi + j, run.sin_phi + j, ws);
-        padding = j + kLanes - n;
+        const VecD product = weight * t;
+        std::memcpy(out + j, &product, sizeof product);
     }
+}
 
-    RunSums out{{0.0, 0.0, 0.0}, 0.0, 0.0, 0.0, 0, false};
-    for (int k = 0; k < kLanes; ++k) {
-        out.rgb[k % 3] += f.a0[k];
-        out.rgb[(kLanes + k) % 3] += f.a1[k];
-        out.rgb[(2 * kLanes + k) % 3] += f.a2[k];
-        out.negative |= f.lowest[k] < 0.0f;
-        out.w += ws.w[k];
-        out.w_cos += ws.c[k];
-        out.w_sin += ws.s[k];
-        out.zero_weight += std::size_t(ws.zero[k]);
+// Runs are short (at 360x90 with 300 lights 12 cells on average, 4 in
+// every other one), so a run's sums are kept per cell, not per lane of
+// cells: one 4-lane vector gathers a cell's (R, G, B, ·) with one load, the
+// other its (w, w cos φ, w sin φ, 0), and nothing is left to reduce across
+// lanes at the end. Even and odd cells go to separate sums, so two add
+// chains run side by side.
+typedef double Vec4D __attribute__((vector_size(4 * sizeof(double))));
+typedef float Vec4F __attribute__((vector_size(4 * sizeof(float))));
+typedef int Mask4F __attribute__((vector_size(4 * sizeof(float))));
+
+struct CellSums {
+    Vec4D rgb{}, weight{};
+};
+
+// Cell j; `f` = its four floats from R on, the fourth the next cell's R:
+// left out of the sums and, unless `next_in_run`, of the lowest value.
+template <bool next_in_run>
+[[gnu::always_inline]] inline void add_cell(const RowRun& run, std::size_t j, Vec4F f, CellSums& sums, Vec4F& lowest,
+                                            double& lowest_weight) {
+    const Vec4F rgb = next_in_run ? f : __builtin_shuffle(f, Mask4F{0, 1, 2, 2});  // B again for the next R
+    lowest = rgb < lowest ? rgb : lowest;
+    sums.rgb += __builtin_convertvector(f, Vec4D);
+    const double w = run.weight[j];
+    lowest_weight = std::min(lowest_weight, w);
+    sums.weight += Vec4D{w, w * run.cos_phi[j], w * run.sin_phi[j], 0.0};
+}
+
+RunSums run_sums(const RowRun& run) {
+    const std::size_t n = run.cells;
+    // A cell's 4-float load reads one float past it: within the map for every
+    // cell but the map's last.
+    const std::size_t loadable = std::min(n, run.readable - 1);
+    CellSums even, odd;
+    Vec4F lowest = {0.0f, 0.0f, 0.0f, 0.0f};
+    double lowest_weight = std::numeric_limits<double>::infinity();
+    std::size_t j = 0;
+    auto cell = [&](std::size_t k) {
+        Vec4F f;
+        std::memcpy(&f, run.rgb + 3 * k, sizeof f);
+        return f;
+    };
+    // Pairs of cells followed by another of the run (so every load is in the map).
+    for (; j + 3 <= n; j += 2) {
+        add_cell<true>(run, j, cell(j), even, lowest, lowest_weight);
+        add_cell<true>(run, j + 1, cell(j + 1), odd, lowest, lowest_weight);
     }
-    out.zero_weight -= padding;
-    return out;
+    for (; j < n; ++j) {
+        Vec4F f = {0.0f, 0.0f, 0.0f, 0.0f};
+        if (j < loadable) f = cell(j);
+        else std::memcpy(&f, run.rgb + 3 * j, 3 * sizeof(float));
+        add_cell<false>(run, j, f, j % 2 == 0 ? even : odd, lowest, lowest_weight);
+    }
+    const Vec4D rgb = even.rgb + odd.rgb, weight = even.weight + odd.weight;
+    return {{rgb[0], rgb[1], rgb[2]},
+            weight[0],
+            weight[1],
+            weight[2],
+            lowest_weight <= 0.0,
+            lowest[0] < 0.0f || lowest[1] < 0.0f || lowest[2] < 0.0f || lowest[3] < 0.0f};
 }
 
 }  // namespace penumbra::lights::detail::HWY_NAMESPACE
@@ -279,6 +341,7 @@ HWY_AFTER_NAMESPACE();
 namespace penumbra::lights::detail {
 
 HWY_EXPORT(chord2_to);
+HWY_EXPORT(keep_within);
 HWY_EXPORT(nearest_candidates);
 HWY_EXPORT(weighted_squared_angles);
 HWY_EXPORT(run_sums);
@@ -287,13 +350,18 @@ double chord2_to(Points p, std::size_t n, double cx, double cy, double cz, doubl
     return HWY_DYNAMIC_DISPATCH(chord2_to)(p, n, cx, cy, cz, out);
 }
 
+std::size_t keep_within(Points from, const int* index, std::size_t n, const double* distance, double bound2,
+                        double* x, double* y, double* z, int* kept) {
+    return HWY_DYNAMIC_DISPATCH(keep_within)(from, index, n, distance, bound2, x, y, z, kept);
+}
+
 void nearest_candidates(Points candidates, const int* index, std::size_t count, Points cells, std::size_t cells_count,
                         int* nearest) {
     HWY_DYNAMIC_DISPATCH(nearest_candidates)(candidates, index, count, cells, cells_count, nearest);
 }
 
-double weighted_squared_angles(const RowRun& run, double lx, double ly, double lz) {
-    return HWY_DYNAMIC_DISPATCH(weighted_squared_angles)(run, lx, ly, lz);
+void weighted_squared_angles(const RowRun& run, Points lights, double* out) {
+    HWY_DYNAMIC_DISPATCH(weighted_squared_angles)(run, lights, out);
 }
 
 RunSums run_sums(const RowRun& run) { return HWY_DYNAMIC_DISPATCH(run_sums)(run); }
