@@ -1,5 +1,6 @@
 #include "visibility/model_file.hpp"
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -17,10 +18,10 @@ constexpr char model_magic[9] = "PNMBRZHM";
 constexpr char training_magic[9] = "PNMBRVIS";
 constexpr std::size_t header_bytes = 32;
 
-void write_file(const std::string& path, const char* magic, const std::string& payload) {
+void write_file(const std::string& path, const char* magic, std::uint32_t version, const std::string& payload) {
     std::string header(header_bytes, '\0');
     std::memcpy(header.data(), magic, 8);
-    const std::uint32_t version = model_format_version, reserved = 0;
+    const std::uint32_t reserved = 0;
     const std::uint64_t size = payload.size(), checksum = fnv1a64(payload.data(), payload.size());
     std::memcpy(header.data() + 8, &version, 4);
     std::memcpy(header.data() + 12, &reserved, 4);
@@ -36,8 +37,10 @@ void write_file(const std::string& path, const char* magic, const std::string& p
     });
 }
 
-// Reads the file, checks magic, version, size and checksum; returns the payload.
-std::string read_payload(const std::string& path, const char* magic, const char* kind) {
+// Reads the file, checks magic, version (oldest to newest, both read), size
+// and checksum; returns the payload and sets version.
+std::string read_payload(const std::string& path, const char* magic, const char* kind, std::uint32_t oldest,
+                         std::uint32_t newest, std::uint32_t& version) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw IoError("cannot open " + std::string(kind) + " '" + path + "': no such file or not readable");
     std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -52,14 +55,15 @@ std::string read_payload(const std::string& path, const char* magic, const char*
         throw IoError(prefix + (other ? "it is the other kind of Penumbra visibility file"
                                       : "wrong magic number (not a Penumbra visibility file)"));
     }
-    std::uint32_t version;
     std::uint64_t size, checksum;
     std::memcpy(&version, bytes.data() + 8, 4);
     std::memcpy(&size, bytes.data() + 16, 8);
     std::memcpy(&checksum, bytes.data() + 24, 8);
-    if (version != model_format_version)
+    if (version < oldest || version > newest)
         throw IoError(prefix + "format version " + std::to_string(version) + ", this build reads version " +
-                      std::to_string(model_format_version) + " (re-bake, or use a matching Penumbra)");
+                      (oldest == newest ? std::to_string(newest)
+                                        : std::to_string(oldest) + " to " + std::to_string(newest)) +
+                      " (re-bake, or use a matching Penumbra)");
     const std::uint64_t actual = bytes.size() - header_bytes;
     if (actual < size)
         throw IoError(prefix + "it is truncated (" + std::to_string(actual) + " of " + std::to_string(size) +
@@ -93,12 +97,14 @@ void write_pose_model(const std::string& path, const PoseModel& model) {
     w.put(std::uint64_t(model.joint_index.size()));
     w.put_array(model.joint_index);
     w.put_array(model.bias);
+    w.put_array(model.weight_scales);
     w.put_array(model.weights);
-    write_file(path, model_magic, w.bytes());
+    write_file(path, model_magic, model_format_version, w.bytes());
 }
 
 PoseModel read_pose_model(const std::string& path) {
-    const std::string payload = read_payload(path, model_magic, "Penumbra pose model");
+    std::uint32_t version = 0;
+    const std::string payload = read_payload(path, model_magic, "Penumbra pose model", 1, model_format_version, version);
     BinaryReader r(path, "Penumbra visibility file", payload.data(), payload.size());
     PoseModel m;
     m.order = int(r.get<std::uint32_t>());
@@ -126,8 +132,22 @@ PoseModel read_pose_model(const std::string& path) {
     m.joint_index = r.get_array<std::uint16_t>(nnz, "the joint indices");
     const std::uint64_t d = std::uint64_t(m.params_per_vertex());
     m.bias = r.get_array<float>(m.vertex_count * d, "the constant terms");
-    m.weights = r.get_array<float>(nnz * features_per_joint(m.features) * d, "the joint weights");
-    r.expect_end();
+    const std::uint64_t n_weights = nnz * features_per_joint(m.features) * d;
+    if (version == 1) {  // float32 weights, before binary16 blocks
+        const std::vector<float> weights = r.get_array<float>(n_weights, "the joint weights");
+        r.expect_end();
+        for (float x : weights)
+            if (!std::isfinite(x)) r.fail("model has a non-finite value");
+        try {
+            set_weights(m, weights);
+        } catch (const ArgumentError& e) {
+            r.fail(e.what());
+        }
+    } else {
+        m.weight_scales = r.get_array<float>(nnz, "the weight scales");
+        m.weights = r.get_array<std::uint16_t>(n_weights, "the joint weights");
+        r.expect_end();
+    }
     try {
         check_pose_model(m);
     } catch (const ArgumentError& e) {
@@ -153,11 +173,13 @@ void write_training_set(const std::string& path, const TrainingSet& set) {
         w.put_array(f.bone_rotations);
         w.put_array(f.visibility);
     }
-    write_file(path, training_magic, w.bytes());
+    write_file(path, training_magic, training_format_version, w.bytes());
 }
 
 TrainingSet read_training_set(const std::string& path) {
-    const std::string payload = read_payload(path, training_magic, "Penumbra visibility training set");
+    std::uint32_t version = 0;
+    const std::string payload = read_payload(path, training_magic, "Penumbra visibility training set",
+                                             training_format_version, training_format_version, version);
     BinaryReader r(path, "Penumbra visibility file", payload.data(), payload.size());
     TrainingSet s;
     s.settings.order = int(r.get<std::uint32_t>());

@@ -3,7 +3,10 @@
 //
 // Layout (little-endian, both kinds):
 //   bytes 0–7    magic "PNMBRZHM" (model) or "PNMBRVIS" (training set)
-//   bytes 8–11   u32 format version (1)
+//   bytes 8–11   u32 format version: models 2 (binary16 weight blocks with a
+//                float scale each, weight_blocks.hpp; version 1, float32
+//                weights, is still read and rounded to blocks), training
+//                sets 1
 //   bytes 12–15  u32 reserved, 0
 //   bytes 16–23  u64 payload size in bytes (the rest of the file)
 //   bytes 24–31  u64 FNV-1a 64 checksum of the payload
@@ -22,7 +25,8 @@
 
 namespace penumbra::visibility {
 
-constexpr std::uint32_t model_format_version = 1;
+constexpr std::uint32_t model_format_version = 2;
+constexpr std::uint32_t training_format_version = 1;
 
 void write_pose_model(const std::string& path, const PoseModel& model);
 PoseModel read_pose_model(const std::string& path);

@@ -20,6 +20,7 @@
 #include "common/parallel.hpp"
 #include "visibility/ridge_curve.hpp"
 #include "visibility/runtime_kernel.hpp"
+#include "visibility/weight_blocks.hpp"
 
 namespace penumbra::visibility {
 
@@ -182,10 +183,31 @@ void check_pose_model(const PoseModel& m) {
         if (j >= m.joints.size()) throw ArgumentError("model joint index out of range");
     if (m.bias.size() != m.vertex_count * d) throw ArgumentError("model bias size does not match");
     if (m.weights.size() != m.joint_index.size() * fpj * d) throw ArgumentError("model weight size does not match");
+    if (m.weight_scales.size() != m.joint_index.size()) throw ArgumentError("model weight scales do not match");
     for (float x : m.bias)
         if (!std::isfinite(x)) throw ArgumentError("model has a non-finite value");
-    for (float x : m.weights)
-        if (!std::isfinite(x)) throw ArgumentError("model has a non-finite value");
+    for (float x : m.weight_scales)
+        if (!std::isfinite(x) || x < 0.0f) throw ArgumentError("model has a non-finite or negative weight scale");
+    for (std::uint16_t x : m.weights)
+        if (!finite_half(x)) throw ArgumentError("model has a non-finite value");
+}
+
+void set_weights(PoseModel& model, const std::vector<float>& weights) {
+    const std::size_t block = std::size_t(features_per_joint(model.features)) * model.params_per_vertex();
+    const std::size_t blocks = model.joint_index.size();
+    if (weights.size() != blocks * block) throw ArgumentError("model weight size does not match");
+    model.weights.resize(weights.size());
+    model.weight_scales.resize(blocks);
+    for (std::size_t e = 0; e < blocks; ++e)
+        model.weight_scales[e] = pack_weight_block(weights.data() + e * block, block, model.weights.data() + e * block);
+}
+
+std::vector<float> weight_values(const PoseModel& model) {
+    const std::size_t block = std::size_t(features_per_joint(model.features)) * model.params_per_vertex();
+    std::vector<float> values(model.weights.size());
+    for (std::size_t e = 0; e < model.weight_scales.size() && (e + 1) * block <= values.size(); ++e)
+        unpack_weight_block(model.weights.data() + e * block, block, model.weight_scales[e], values.data() + e * block);
+    return values;
 }
 
 namespace {
@@ -335,8 +357,11 @@ public:
     Errors predicted_errors(const std::vector<std::size_t>& rows, const Eigen::MatrixXf& predicted) const;
     // Per vertex: constant, or the joints that matter (decided on `rows`,
     // the frames the solver was fitted on, or given as `decided`), and the
-    // bias. W: the solver's ridge weights (k × V·d).
-    PrunedModel prune(const std::vector<std::size_t>& rows, const RidgeSolver& sol, const Eigen::MatrixXf& W,
+    // bias. W: the solver's ridge weights (k × V·d); the blocks kept are
+    // rounded in place to their stored form (weight_blocks.hpp) before the
+    // bias is folded, so the bias absorbs the rounding at the mean pose and
+    // errors measured with W afterwards are the stored model's.
+    PrunedModel prune(const std::vector<std::size_t>& rows, const RidgeSolver& sol, Eigen::MatrixXf& W,
                       const std::vector<std::vector<std::uint16_t>>* decided, const Progress& progress, double from,
                       double to) const;
     // Errors of a pruned model (as stored) on frames it was not fitted on.
@@ -434,7 +459,7 @@ void LinearFit::prune_vertex(std::size_t v, const std::vector<std::size_t>& rows
     }
 }
 
-PrunedModel LinearFit::prune(const std::vector<std::size_t>& rows, const RidgeSolver& sol, const Eigen::MatrixXf& W,
+PrunedModel LinearFit::prune(const std::vector<std::size_t>& rows, const RidgeSolver& sol, Eigen::MatrixXf& W,
                              const std::vector<std::vector<std::uint16_t>>* decided, const Progress& progress,
                              double from, double to) const {
     const std::size_t R = rows.size(), n_active = shape_.k / shape_.fpj;
@@ -449,8 +474,15 @@ PrunedModel LinearFit::prune(const std::vector<std::size_t>& rows, const RidgeSo
                                                                                      std::size_t end) {
         PruneScratch scratch{Eigen::MatrixXd(R, d), Eigen::MatrixXd(R, d), std::vector<Eigen::MatrixXd>(n_active),
                              std::vector<std::pair<double, std::size_t>>(n_active)};
+        std::vector<float> block(std::size_t(fpj) * d);
         for (std::size_t v = begin; v < end; ++v) {
             if (!decided) prune_vertex(v, rows, sol, W, Ac, scratch, out.kept[v]);
+            for (auto j : out.kept[v]) {  // columns of vertex v only: no other task touches them
+                auto stored = W.block(j * fpj, v * d, fpj, d);
+                Eigen::Map<Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(block.data(), fpj, d) = stored;
+                round_weight_block(block.data(), block.size());
+                stored = Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(block.data(), fpj, d);
+            }
             // Bias with the feature means folded in: params = bias + Σ φ_j W_j.
             Eigen::RowVectorXd bias = sol.b_mean.segment(v * d, d).cast<double>();
             for (auto j : out.kept[v])
@@ -569,16 +601,18 @@ void store_model(const TrainingSet& set, const FitSettings& settings, const FitS
         if (kept[v].empty()) ++report.constant_vertices;
     }
     model.joint_index.reserve(model.joint_offsets[V]);
-    model.weights.reserve(std::size_t(model.joint_offsets[V]) * fpj * d);
+    std::vector<float> weights;
+    weights.reserve(std::size_t(model.joint_offsets[V]) * fpj * d);
     for (std::size_t v = 0; v < V; ++v)
         for (auto j : kept[v]) {
             model.joint_index.push_back(j);
             for (int a = 0; a < fpj; ++a)
-                for (int i = 0; i < d; ++i) model.weights.push_back(W(j * fpj + a, v * d + i));
+                for (int i = 0; i < d; ++i) weights.push_back(W(j * fpj + a, v * d + i));
         }
+    set_weights(model, weights);  // W's kept blocks are already rounded (prune): this packs them exactly
     report.stored_joint_blocks = model.joint_index.size();
     report.model_bytes = 4 * model.joint_offsets.size() + 2 * model.joint_index.size() + 4 * model.bias.size() +
-                         4 * model.weights.size();
+                         2 * model.weights.size() + 4 * model.weight_scales.size();
     report.dense_bytes = 4 * std::size_t(d) * (shape.k + 1) * V;
 }
 
@@ -697,14 +731,16 @@ void synthesize_range(const PoseModel& model, const float* features, std::size_t
     // parameters are the bias alone. The loop is runtime_kernel.cpp's (SIMD
     // targets chosen at run time).
     detail::synthesize_range(model.params_per_vertex(), features_per_joint(model.features), model.joint_offsets.data(),
-                             model.joint_index.data(), model.bias.data(), model.weights.data(), features, begin, end,
+                             model.joint_index.data(), model.bias.data(), model.weights.data(),
+                             model.weight_scales.data(), features, begin, end,
                              params_out);
 }
 
 void synthesize_rows(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
                      float* params_out, std::size_t stride) {
     detail::synthesize_range(model.params_per_vertex(), features_per_joint(model.features), model.joint_offsets.data(),
-                             model.joint_index.data(), model.bias.data(), model.weights.data(), features, begin, end,
+                             model.joint_index.data(), model.bias.data(), model.weights.data(),
+                             model.weight_scales.data(), features, begin, end,
                              params_out, std::max<std::size_t>(stride, 1));
 }
 

@@ -142,11 +142,14 @@ struct PoseModel {
     std::vector<std::string> armature_bones;  // every bone of the armature at bake time
     std::vector<std::string> joints;          // active joints, in pose-vector order
     // Per vertex v: params = bias[v] + Σ_{e in [offsets[v], offsets[v+1])}
-    //                  features(joint_index[e]) · weights[e] (features_per_joint × d).
+    //   features(joint_index[e]) · weight_scales[e] · weights[e] (features_per_joint × d),
+    // the weights stored as binary16 with a power-of-two scale per block
+    // (weight_blocks.hpp; set_weights packs floats, weight_values unpacks).
     std::vector<std::uint32_t> joint_offsets;  // vertex_count + 1
     std::vector<std::uint16_t> joint_index;
     std::vector<float> bias;                   // vertex_count × d
-    std::vector<float> weights;                // blocks × features_per_joint × d
+    std::vector<std::uint16_t> weights;        // blocks × features_per_joint × d, binary16 bits
+    std::vector<float> weight_scales;          // blocks
     // Summary of the bake, stored with the model (name, value).
     std::vector<std::pair<std::string, double>> summary;
 
@@ -155,6 +158,12 @@ struct PoseModel {
 
 // Throws ArgumentError when the model is inconsistent (sizes, indices).
 void check_pose_model(const PoseModel& model);
+
+// The model's weights from floats (blocks × features_per_joint × d, as the
+// joint blocks run; the joint offsets and indices set first), rounded to the
+// stored form; and back to floats.
+void set_weights(PoseModel& model, const std::vector<float>& weights);
+std::vector<float> weight_values(const PoseModel& model);
 
 PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence>& influence,
                          const FitSettings& settings, const Progress& progress = {}, FitReport* report = nullptr);

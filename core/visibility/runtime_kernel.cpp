@@ -404,10 +404,33 @@ PENUMBRA_LANES_INLINE Quad multiply_add(Quad a, Quad b, Quad acc) {
 // accumulator stays in registers (groups of 4) across a block's features;
 // with d a run-time value it went through memory for every feature, each add
 // waiting on the last store.
+namespace hn = hwy::HWY_NAMESPACE;
+
+PENUMBRA_LANES_INLINE float load_half(const std::uint16_t* p) {
+    const hn::FixedTag<float, 1> d1;
+    const hn::FixedTag<hwy::float16_t, 1> dh1;
+    return hn::GetLane(hn::PromoteTo(d1, hn::LoadU(dh1, reinterpret_cast<const hwy::float16_t*>(p))));
+}
+
+// Four binary16 weights as floats: one F16C instruction on the AVX2 and
+// AVX-512 targets, Highway's integer emulation on the others (one lane at
+// a time on the scalar one).
+PENUMBRA_LANES_INLINE Quad load_half_quad(const std::uint16_t* p) {
+#if HWY_TARGET == HWY_SCALAR
+    return Quad{load_half(p), load_half(p + 1), load_half(p + 2), load_half(p + 3)};
+#else
+    const hn::FixedTag<float, 4> d4;
+    const hn::FixedTag<hwy::float16_t, 4> dh4;
+    alignas(16) float values[4];
+    hn::Store(hn::PromoteTo(d4, hn::LoadU(dh4, reinterpret_cast<const hwy::float16_t*>(p))), d4, values);
+    return load_quad(values);
+#endif
+}
+
 template <int D>
 void synthesize_fixed(int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index, const float* bias,
-                      const float* weights, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out, std::size_t stride) {
+                      const std::uint16_t* weights, const float* scales, const float* features, std::size_t begin,
+                      std::size_t end, float* params_out, std::size_t stride) {
     static_assert(D % 4 == 0);
     constexpr int kQuads = D / 4;
     for (std::size_t v = begin; v < end; ++v) {
@@ -415,10 +438,14 @@ void synthesize_fixed(int fpj, const std::uint32_t* offsets, const std::uint16_t
         for (int q = 0; q < kQuads; ++q) acc[q] = load_quad(bias + v * D + 4 * q);
         for (std::uint32_t e = offsets[v]; e < offsets[v + 1]; ++e) {
             const float* f = features + std::size_t(joint_index[e]) * fpj;
-            const float* w = weights + std::size_t(e) * fpj * D;
+            const std::uint16_t* w = weights + std::size_t(e) * fpj * D;
+            // The block's scale goes on the feature: one product per feature,
+            // exact (a power of two).
+            const float scale = scales[e];
             for (int a = 0; a < fpj; ++a) {
-                const Quad fa = f[a] - Quad{};
-                for (int q = 0; q < kQuads; ++q) acc[q] = multiply_add(fa, load_quad(w + a * D + 4 * q), acc[q]);
+                const Quad fa = f[a] * scale - Quad{};
+                for (int q = 0; q < kQuads; ++q)
+                    acc[q] = multiply_add(fa, load_half_quad(w + a * D + 4 * q), acc[q]);
             }
         }
         if (!stride) {
@@ -432,8 +459,8 @@ void synthesize_fixed(int fpj, const std::uint32_t* offsets, const std::uint16_t
 }
 
 void synthesize_any(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index, const float* bias,
-                    const float* weights, const float* features, std::size_t begin, std::size_t end,
-                    float* params_out, std::size_t stride) {
+                    const std::uint16_t* weights, const float* scales, const float* features, std::size_t begin,
+                    std::size_t end, float* params_out, std::size_t stride) {
     for (std::size_t v = begin; v < end; ++v) {
         // Column v − begin of the rows, or the vertex's d values.
         const std::size_t step = stride ? stride : 1;
@@ -441,27 +468,29 @@ void synthesize_any(int d, int fpj, const std::uint32_t* offsets, const std::uin
         for (int i = 0; i < d; ++i) acc[i * step] = bias[v * d + i];
         for (std::uint32_t e = offsets[v]; e < offsets[v + 1]; ++e) {
             const float* f = features + std::size_t(joint_index[e]) * fpj;
-            const float* w = weights + std::size_t(e) * fpj * d;
-            for (int a = 0; a < fpj; ++a)
-                for (int i = 0; i < d; ++i) acc[i * step] = multiply_add(f[a], w[a * d + i], acc[i * step]);
+            const std::uint16_t* w = weights + std::size_t(e) * fpj * d;
+            for (int a = 0; a < fpj; ++a) {
+                const float fa = f[a] * scales[e];
+                for (int i = 0; i < d; ++i) acc[i * step] = multiply_add(fa, load_half(w + a * d + i), acc[i * step]);
+            }
         }
     }
 }
 
 void synthesize_range(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index,
-                      const float* bias, const float* weights, const float* features, std::size_t begin,
-                      std::size_t end, float* params_out, std::size_t stride) {
+                      const float* bias, const std::uint16_t* weights, const float* scales, const float* features,
+                      std::size_t begin, std::size_t end, float* params_out, std::size_t stride) {
     // 2 and 4 lobes at order 4 (2 + 4 parameters per lobe), the usual models.
     switch (d) {
         case 12:
-            return synthesize_fixed<12>(fpj, offsets, joint_index, bias, weights, features, begin, end, params_out,
-                                        stride);
+            return synthesize_fixed<12>(fpj, offsets, joint_index, bias, weights, scales, features, begin, end,
+                                        params_out, stride);
         case 24:
-            return synthesize_fixed<24>(fpj, offsets, joint_index, bias, weights, features, begin, end, params_out,
-                                        stride);
+            return synthesize_fixed<24>(fpj, offsets, joint_index, bias, weights, scales, features, begin, end,
+                                        params_out, stride);
         default:
-            return synthesize_any(d, fpj, offsets, joint_index, bias, weights, features, begin, end, params_out,
-                                  stride);
+            return synthesize_any(d, fpj, offsets, joint_index, bias, weights, scales, features, begin, end,
+                                  params_out, stride);
     }
 }
 
@@ -480,9 +509,9 @@ HWY_EXPORT(frames_range);
 HWY_EXPORT(synthesize_range);
 
 void synthesize_range(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index,
-                      const float* bias, const float* weights, const float* features, std::size_t begin,
-                      std::size_t end, float* params_out, std::size_t stride) {
-    HWY_DYNAMIC_DISPATCH(synthesize_range)(d, fpj, offsets, joint_index, bias, weights, features, begin, end,
+                      const float* bias, const std::uint16_t* weights, const float* scales, const float* features,
+                      std::size_t begin, std::size_t end, float* params_out, std::size_t stride) {
+    HWY_DYNAMIC_DISPATCH(synthesize_range)(d, fpj, offsets, joint_index, bias, weights, scales, features, begin, end,
                                            params_out, stride);
 }
 

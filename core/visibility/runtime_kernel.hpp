@@ -70,13 +70,14 @@ void lobes_from_params(int order, std::size_t count, const float* params, float*
 // The pose model's lobe parameters of vertices [begin, end) (pose_model.hpp's
 // synthesize_range): per vertex v, bias[v] (d floats) plus, for each stored
 // joint block e in [offsets[v], offsets[v + 1]), the joint's fpj features
-// times the block's fpj × d weights. Written from params_out[0] on. On
+// times scales[e] times the block's fpj × d binary16 weights
+// (weight_blocks.hpp). Written from params_out[0] on. On
 // targets with FMA the multiply-adds are fused (the result differs from the
 // others by float rounding). stride 0: d floats per vertex from
 // params_out[0]; otherwise d rows `stride` floats apart, vertex v in column
 // v − begin (sh::PoseBlock's layout).
 void synthesize_range(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index,
-                      const float* bias, const float* weights, const float* features, std::size_t begin,
-                      std::size_t end, float* params_out, std::size_t stride = 0);
+                      const float* bias, const std::uint16_t* weights, const float* scales, const float* features,
+                      std::size_t begin, std::size_t end, float* params_out, std::size_t stride = 0);
 
 }  // namespace penumbra::visibility::detail

@@ -31,6 +31,7 @@ TEST(ModelFile, round_trip_is_exact) {
     EXPECT_EQ(back.joints, model.joints);
     EXPECT_EQ(back.armature_bones, model.armature_bones);
     EXPECT_EQ(back.weights, model.weights);
+    EXPECT_EQ(back.weight_scales, model.weight_scales);
     EXPECT_EQ(back.bias, model.bias);
     EXPECT_EQ(back.joint_offsets, model.joint_offsets);
     EXPECT_EQ(back.topology_hash, model.topology_hash);

@@ -69,12 +69,16 @@ TEST(PoseModel, held_out_error_is_that_of_the_pruned_model_as_stored) {
     EXPECT_EQ(report.model_holdout.samples, holdout.frames.size() * 50);
     EXPECT_GT(report.model_holdout.sh_rms, 5 * report.model_holdout_unpruned.sh_rms);
 
-    // No pruning at all: the stored model is the ridge solution, same error.
+    // No pruning at all: the stored model is the ridge solution with its
+    // weights rounded to binary16 blocks (weight_blocks.hpp), the same error
+    // up to that rounding: each weight within 2^-12 of its block's largest
+    // (here the error rises from 6e-7 to 6e-6, the model being near exact on
+    // this synthetic set; reporting the unpruned error would hide it).
     s.constant_tolerance = 0.0;
     s.prune_tolerance = 0.0;
     fit_pose_model(set, influence, s, {}, &report);
     EXPECT_NEAR(report.model_holdout.sh_rms, report.model_holdout_unpruned.sh_rms,
-                1e-4 * report.model_holdout_unpruned.sh_rms + 1e-7);
+                1e-4 * report.model_holdout_unpruned.sh_rms + 2e-5);
 }
 
 TEST(PoseModel, stays_finite_with_more_columns_than_frames_repeated_frames_and_still_joints) {
@@ -87,7 +91,7 @@ TEST(PoseModel, stays_finite_with_more_columns_than_frames_repeated_frames_and_s
         s.features = features;
         FitReport report;
         const PoseModel model = fit_pose_model(set, {{true, false}, {true, false}, {true, false}}, s, {}, &report);
-        for (float x : model.weights) EXPECT_TRUE(std::isfinite(x));
+        for (float x : weight_values(model)) EXPECT_TRUE(std::isfinite(x));
         for (float x : model.bias) EXPECT_TRUE(std::isfinite(x));
         EXPECT_TRUE(std::isfinite(report.model_holdout.sh_rms));
         EXPECT_LT(report.model_training.sh_rms, 0.05);
@@ -162,9 +166,10 @@ TEST(PoseModel, a_vertex_whose_visibility_repeats_gets_the_fit_of_its_first_occu
     FitReport a_report, b_report;
     const PoseModel a = fit_pose_model(repeated, influence, s, {}, &a_report);
     const PoseModel b = fit_pose_model(perturbed, influence, s, {}, &b_report);
-    ASSERT_EQ(a.weights.size(), b.weights.size());
-    ASSERT_GT(a.weights.size(), 0u);
-    for (std::size_t i = 0; i < a.weights.size(); ++i) EXPECT_NEAR(a.weights[i], b.weights[i], 1e-3) << i;
+    const std::vector<float> a_weights = weight_values(a), b_weights = weight_values(b);
+    ASSERT_EQ(a_weights.size(), b_weights.size());
+    ASSERT_GT(a_weights.size(), 0u);
+    for (std::size_t i = 0; i < a_weights.size(); ++i) EXPECT_NEAR(a_weights[i], b_weights[i], 1e-3) << i;
     for (std::size_t i = 0; i < a.bias.size(); ++i) EXPECT_NEAR(a.bias[i], b.bias[i], 1e-3) << i;
     EXPECT_NEAR(a_report.zh_fit.sh_rms, b_report.zh_fit.sh_rms, 1e-5);
 }

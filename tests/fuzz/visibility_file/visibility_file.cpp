@@ -47,7 +47,7 @@ void check_model(const PoseModel& m, const std::string& path) {
                             r.vertex_count == m.vertex_count && r.topology_hash == m.topology_hash &&
                             r.armature_bones == m.armature_bones && r.joints == m.joints &&
                             r.joint_offsets == m.joint_offsets && r.joint_index == m.joint_index &&
-                            same_bits(r.bias, m.bias) && same_bits(r.weights, m.weights) &&
+                            same_bits(r.bias, m.bias) && r.weights == m.weights && same_bits(r.weight_scales, m.weight_scales) &&
                             r.summary.size() == m.summary.size(),
                         "a pose model written back does not read back the same");
 }
