@@ -281,7 +281,6 @@ void weighted_squared_angles(const RowRun& run, Points lights, double* out) {
 // chains run side by side.
 typedef double Vec4D __attribute__((vector_size(4 * sizeof(double))));
 typedef float Vec4F __attribute__((vector_size(4 * sizeof(float))));
-typedef int Mask4F __attribute__((vector_size(4 * sizeof(float))));
 
 struct CellSums {
     Vec4D rgb{}, weight{};
@@ -292,7 +291,8 @@ struct CellSums {
 template <bool next_in_run>
 [[gnu::always_inline]] inline void add_cell(const RowRun& run, std::size_t j, Vec4F f, CellSums& sums, Vec4F& lowest,
                                             double& lowest_weight) {
-    const Vec4F rgb = next_in_run ? f : __builtin_shuffle(f, Mask4F{0, 1, 2, 2});  // B again for the next R
+    // B again for the next R (lane by lane: clang, which builds the fuzzers, has no __builtin_shuffle).
+    const Vec4F rgb = next_in_run ? f : Vec4F{f[0], f[1], f[2], f[2]};
     lowest = rgb < lowest ? rgb : lowest;
     sums.rgb += __builtin_convertvector(f, Vec4D);
     const double w = run.weight[j];
