@@ -282,6 +282,7 @@ py::dict report_dict(const vis::FitReport& report) {
         d["name"] = j.name;
         d["active"] = j.active;
         d["max_angle_degrees"] = j.max_angle_degrees;
+        d["feature_directions"] = j.feature_directions;
         d["reason"] = j.reason;
         joints.append(d);
     }
@@ -296,6 +297,7 @@ py::dict report_dict(const vis::FitReport& report) {
     r["ridge_curve"] = report.ridge_curve;
     r["constant_vertices"] = report.constant_vertices;
     r["stored_joint_blocks"] = report.stored_joint_blocks;
+    r["stored_directions"] = report.stored_directions;
     r["model_bytes"] = report.model_bytes;
     r["dense_bytes"] = report.dense_bytes;
     r["seconds_zh_fit"] = report.seconds_zh_fit;
@@ -305,8 +307,8 @@ py::dict report_dict(const vis::FitReport& report) {
 
 py::tuple fit_model(const vis::TrainingSet& set, const std::vector<std::pair<bool, bool>>& influence, int lobes,
                     vis::PoseFeatures features, double joint_tolerance_degrees, int holdout_stride,
-                    double constant_tolerance, double prune_tolerance, int zh_iterations, int frame_zh_iterations, double axis_prior,
-                    int threads, py::object progress) {
+                    double constant_tolerance, double prune_tolerance, double feature_tolerance, int zh_iterations,
+                    int frame_zh_iterations, double axis_prior, int threads, py::object progress) {
     vis::FitSettings s;
     s.lobes = lobes;
     s.features = features;
@@ -314,6 +316,7 @@ py::tuple fit_model(const vis::TrainingSet& set, const std::vector<std::pair<boo
     s.holdout_stride = holdout_stride;
     s.constant_tolerance = constant_tolerance;
     s.prune_tolerance = prune_tolerance;
+    s.feature_tolerance = feature_tolerance;
     s.zh_iterations = zh_iterations;
     s.frame_zh_iterations = frame_zh_iterations;
     s.axis_prior = axis_prior;
@@ -343,7 +346,8 @@ void bind_visibility_model(py::module_& m) {
     m.def("fit_model", &fit_model, py::arg("training_set"), py::arg("bone_influence"), py::arg("lobes") = fit.lobes,
           py::arg("features") = fit.features, py::arg("joint_tolerance_degrees") = fit.joint_tolerance_degrees,
           py::arg("holdout_stride") = fit.holdout_stride, py::arg("constant_tolerance") = fit.constant_tolerance,
-          py::arg("prune_tolerance") = fit.prune_tolerance, py::arg("zh_iterations") = fit.zh_iterations,
+          py::arg("prune_tolerance") = fit.prune_tolerance, py::arg("feature_tolerance") = fit.feature_tolerance,
+          py::arg("zh_iterations") = fit.zh_iterations,
           py::arg("frame_zh_iterations") = fit.frame_zh_iterations,
           py::arg("axis_prior") = fit.axis_prior, py::arg("threads") = fit.threads, py::arg("progress") = py::none(),
           "Fits ZH lobes per vertex and frame and the linear pose model (paper §3.1). bone_influence: one "

@@ -97,6 +97,9 @@ void write_pose_model(const std::string& path, const PoseModel& model) {
     w.put(std::uint64_t(model.joint_index.size()));
     w.put_array(model.joint_index);
     w.put_array(model.bias);
+    w.put_array(model.feature_offsets);
+    w.put_array(model.feature_basis);
+    w.put_array(model.block_directions);
     w.put_array(model.weight_scales);
     w.put_array(model.weights);
     write_file(path, model_magic, model_format_version, w.bytes());
@@ -132,21 +135,30 @@ PoseModel read_pose_model(const std::string& path) {
     m.joint_index = r.get_array<std::uint16_t>(nnz, "the joint indices");
     const std::uint64_t d = std::uint64_t(m.params_per_vertex());
     m.bias = r.get_array<float>(m.vertex_count * d, "the constant terms");
-    const std::uint64_t n_weights = nnz * features_per_joint(m.features) * d;
-    if (version == 1) {  // float32 weights, before binary16 blocks
-        const std::vector<float> weights = r.get_array<float>(n_weights, "the joint weights");
-        r.expect_end();
-        for (float x : weights)
-            if (!std::isfinite(x)) r.fail("model has a non-finite value");
-        try {
+    const std::uint64_t fpj = features_per_joint(m.features);
+    try {
+        if (version == 1) {  // float32 weights of the raw joint features, before binary16 blocks
+            const std::vector<float> weights = r.get_array<float>(nnz * fpj * d, "the joint weights");
+            r.expect_end();
+            for (float x : weights)
+                if (!std::isfinite(x)) r.fail("model has a non-finite value");
+            use_raw_joint_features(m);
             set_weights(m, weights);
-        } catch (const ArgumentError& e) {
-            r.fail(e.what());
+        } else {
+            m.feature_offsets = r.get_array<std::uint32_t>(m.joints.size() + 1, "the joint feature offsets");
+            if (m.feature_offsets.front() != 0) r.fail("joint feature offsets do not start at 0");
+            for (std::size_t j = 0; j < m.joints.size(); ++j)
+                if (m.feature_offsets[j + 1] < m.feature_offsets[j] || m.feature_offsets[j + 1] - m.feature_offsets[j] > fpj)
+                    r.fail("joint feature counts out of range");
+            m.feature_basis = r.get_array<float>(m.feature_offsets.back() * fpj, "the joint feature directions");
+            m.block_directions = r.get_array<std::uint8_t>(nnz, "the block directions");
+            m.weight_scales = r.get_array<float>(nnz, "the weight scales");
+            index_weight_blocks(m);
+            m.weights = r.get_array<std::uint16_t>(m.weight_offsets.back(), "the joint weights");
+            r.expect_end();
         }
-    } else {
-        m.weight_scales = r.get_array<float>(nnz, "the weight scales");
-        m.weights = r.get_array<std::uint16_t>(n_weights, "the joint weights");
-        r.expect_end();
+    } catch (const ArgumentError& e) {
+        r.fail(e.what());
     }
     try {
         check_pose_model(m);

@@ -95,8 +95,8 @@ void check_fit_settings(const FitSettings& s) {
     if (!(s.joint_tolerance_degrees >= 0.0)) throw ArgumentError("joint tolerance must be >= 0 degrees");
     if (s.holdout_stride < 0 || s.holdout_stride == 1)
         throw ArgumentError("holdout_stride must be 0 (none) or >= 2");
-    if (!(s.constant_tolerance >= 0.0) || !(s.prune_tolerance >= 0.0))
-        throw ArgumentError("tolerances must be >= 0");
+    if (!(s.constant_tolerance >= 0.0) || !(s.prune_tolerance >= 0.0) || !(s.feature_tolerance >= 0.0 && s.feature_tolerance <= 1.0))
+        throw ArgumentError("tolerances must be >= 0 (the feature tolerance at most 1)");
     if (s.zh_iterations < 0 || s.frame_zh_iterations < 0 || !(s.axis_prior >= 0.0)) throw ArgumentError("ZH fit settings out of range");
     check_range("threads", s.threads, threads_range);
 }
@@ -182,7 +182,28 @@ void check_pose_model(const PoseModel& m) {
     for (auto j : m.joint_index)
         if (j >= m.joints.size()) throw ArgumentError("model joint index out of range");
     if (m.bias.size() != m.vertex_count * d) throw ArgumentError("model bias size does not match");
-    if (m.weights.size() != m.joint_index.size() * fpj * d) throw ArgumentError("model weight size does not match");
+    if (m.feature_offsets.size() != m.joints.size() + 1 || m.feature_offsets.front() != 0)
+        throw ArgumentError("model joint feature offsets do not match its joints");
+    for (std::size_t j = 0; j < m.joints.size(); ++j)
+        if (m.feature_offsets[j + 1] < m.feature_offsets[j] || m.feature_offsets[j + 1] - m.feature_offsets[j] > fpj)
+            throw ArgumentError("model joint feature counts out of range");
+    if (m.feature_basis.size() != std::size_t(m.feature_offsets.back()) * fpj)
+        throw ArgumentError("model joint feature basis size does not match");
+    for (float x : m.feature_basis)
+        if (!std::isfinite(x)) throw ArgumentError("model has a non-finite value");
+    if (m.weight_offsets.size() != m.vertex_count + 1 || m.weight_offsets.front() != 0)
+        throw ArgumentError("model weight offsets do not match its vertex count");
+    if (m.block_directions.size() != m.joint_index.size()) throw ArgumentError("model block directions do not match");
+    for (std::size_t e = 0; e < m.joint_index.size(); ++e)
+        if (m.block_directions[e] == 0 || m.block_directions[e] > m.joint_feature_count(m.joint_index[e]))
+            throw ArgumentError("model block directions out of range");
+    for (std::size_t v = 0; v < m.vertex_count; ++v) {
+        std::uint64_t size = 0;
+        for (std::uint32_t e = m.joint_offsets[v]; e < m.joint_offsets[v + 1]; ++e)
+            size += std::uint64_t(m.block_directions[e]) * d;
+        if (m.weight_offsets[v + 1] != m.weight_offsets[v] + size) throw ArgumentError("model weight offsets are inconsistent");
+    }
+    if (m.weights.size() != m.weight_offsets.back()) throw ArgumentError("model weight size does not match");
     if (m.weight_scales.size() != m.joint_index.size()) throw ArgumentError("model weight scales do not match");
     for (float x : m.bias)
         if (!std::isfinite(x)) throw ArgumentError("model has a non-finite value");
@@ -192,32 +213,77 @@ void check_pose_model(const PoseModel& m) {
         if (!finite_half(x)) throw ArgumentError("model has a non-finite value");
 }
 
+void use_raw_joint_features(PoseModel& model) {
+    const std::size_t fpj = std::size_t(features_per_joint(model.features)), J = model.joints.size();
+    model.feature_offsets.resize(J + 1);
+    for (std::size_t j = 0; j <= J; ++j) model.feature_offsets[j] = std::uint32_t(j * fpj);
+    model.feature_basis.assign(J * fpj * fpj, 0.0f);
+    for (std::size_t r = 0; r < J * fpj; ++r) model.feature_basis[r * fpj + r % fpj] = 1.0f;
+    model.block_directions.assign(model.joint_index.size(), std::uint8_t(fpj));
+}
+
+void index_weight_blocks(PoseModel& model) {
+    const std::size_t d = std::size_t(model.params_per_vertex()), V = model.vertex_count;
+    if (model.joint_offsets.size() != V + 1) throw ArgumentError("model joint offsets do not match its vertex count");
+    if (model.feature_offsets.size() != model.joints.size() + 1)
+        throw ArgumentError("model joint feature offsets do not match its joints");
+    model.weight_offsets.assign(V + 1, 0);
+    for (std::size_t v = 0; v < V; ++v) {
+        if (model.joint_offsets[v + 1] < model.joint_offsets[v]) throw ArgumentError("model joint offsets decrease");
+        std::uint64_t at = model.weight_offsets[v];
+        for (std::uint32_t e = model.joint_offsets[v]; e < model.joint_offsets[v + 1]; ++e) {
+            if (e >= model.joint_index.size() || model.joint_index[e] >= model.joints.size())
+                throw ArgumentError("model joint index out of range");
+            if (e >= model.block_directions.size() || model.block_directions[e] == 0 ||
+                model.block_directions[e] > model.joint_feature_count(model.joint_index[e]))
+                throw ArgumentError("model block directions out of range");
+            at += std::uint64_t(model.block_directions[e]) * d;
+        }
+        model.weight_offsets[v + 1] = at;
+    }
+}
+
 void set_weights(PoseModel& model, const std::vector<float>& weights) {
-    const std::size_t block = std::size_t(features_per_joint(model.features)) * model.params_per_vertex();
-    const std::size_t blocks = model.joint_index.size();
-    if (weights.size() != blocks * block) throw ArgumentError("model weight size does not match");
+    index_weight_blocks(model);
+    const std::size_t d = std::size_t(model.params_per_vertex());
+    if (weights.size() != model.weight_offsets.back()) throw ArgumentError("model weight size does not match");
+    model.weight_scales.resize(model.joint_index.size());
     model.weights.resize(weights.size());
-    model.weight_scales.resize(blocks);
-    for (std::size_t e = 0; e < blocks; ++e)
-        model.weight_scales[e] = pack_weight_block(weights.data() + e * block, block, model.weights.data() + e * block);
+    std::size_t at = 0;
+    for (std::size_t e = 0; e < model.joint_index.size(); ++e) {
+        const std::size_t size = std::size_t(model.block_directions[e]) * d;
+        model.weight_scales[e] = pack_weight_block(weights.data() + at, size, model.weights.data() + at);
+        at += size;
+    }
 }
 
 std::vector<float> weight_values(const PoseModel& model) {
-    const std::size_t block = std::size_t(features_per_joint(model.features)) * model.params_per_vertex();
+    const std::size_t d = std::size_t(model.params_per_vertex());
     std::vector<float> values(model.weights.size());
-    for (std::size_t e = 0; e < model.weight_scales.size() && (e + 1) * block <= values.size(); ++e)
-        unpack_weight_block(model.weights.data() + e * block, block, model.weight_scales[e], values.data() + e * block);
+    std::size_t at = 0;
+    for (std::size_t e = 0; e < model.weight_scales.size() && e < model.block_directions.size(); ++e) {
+        const std::size_t size = std::size_t(model.block_directions[e]) * d;
+        if (at + size > values.size()) break;
+        unpack_weight_block(model.weights.data() + at, size, model.weight_scales[e], values.data() + at);
+        at += size;
+    }
     return values;
 }
 
 namespace {
 
 // Shapes every step of the fit shares: SH order and count, lobes, d lobe
-// parameters per vertex, V vertices, F frames, fpj features per joint, k
-// pose features (active joints × fpj).
+// parameters per vertex, V vertices, F frames, fpj raw features per joint,
+// k pose features (Σ over active joints of the directions kept): joint j's
+// are columns [feature_start[j], feature_start[j + 1]) of A.
 struct FitShape {
     int order, lobes, n_sh, d, fpj;
     std::size_t V, F, k;
+    std::vector<std::size_t> feature_start;
+
+    std::size_t joints() const { return feature_start.empty() ? 0 : feature_start.size() - 1; }
+    Eigen::Index first(std::size_t j) const { return Eigen::Index(feature_start[j]); }
+    Eigen::Index count(std::size_t j) const { return Eigen::Index(feature_start[j + 1] - feature_start[j]); }
 };
 
 // The first frame before f whose visibility of vertex v equals frame f's
@@ -289,17 +355,61 @@ Eigen::MatrixXf fit_frame_lobes(const TrainingSet& set, const FitSettings& setti
     return B;
 }
 
-// The pose matrix A (F × k, without its bias column): the features of the
-// active joints per frame.
-Eigen::MatrixXd pose_matrix(const TrainingSet& set, const std::vector<std::size_t>& active, PoseFeatures features,
-                            const FitShape& shape) {
-    Eigen::MatrixXd A(shape.F, shape.k);
-    for (std::size_t f = 0; f < shape.F; ++f)
+// The raw features of the active joints per frame (F × active·fpj).
+Eigen::MatrixXd raw_pose_matrix(const TrainingSet& set, const std::vector<std::size_t>& active, PoseFeatures features,
+                                int fpj) {
+    Eigen::MatrixXd raw(set.frames.size(), active.size() * fpj);
+    for (std::size_t f = 0; f < set.frames.size(); ++f)
         for (std::size_t j = 0; j < active.size(); ++j) {
             double phi[9];
             joint_features(features, set.frames[f].bone_rotations.data() + 9 * active[j], phi);
-            for (int a = 0; a < shape.fpj; ++a) A(f, j * shape.fpj + a) = phi[a];
+            for (int a = 0; a < fpj; ++a) raw(f, j * fpj + a) = phi[a];
         }
+    return raw;
+}
+
+// Each joint's feature directions (pose_model.hpp): the right singular
+// vectors of its raw features over `rows`, centred, whose singular value is
+// at least `tolerance` times the joint's largest (and not zero to rounding).
+// Sets the model's feature_offsets and feature_basis, the shape's
+// feature_start and k, and each active joint's count in `joints`.
+void choose_joint_features(const Eigen::MatrixXd& raw, const std::vector<std::size_t>& rows,
+                           const std::vector<std::size_t>& active, double tolerance, FitShape& shape,
+                           PoseModel& model, std::vector<JointChoice>& joints) {
+    const int fpj = shape.fpj;
+    model.feature_offsets.assign(1, 0);
+    model.feature_basis.clear();
+    shape.feature_start.assign(1, 0);
+    for (std::size_t j = 0; j < active.size(); ++j) {
+        Eigen::MatrixXd block(rows.size(), fpj);
+        for (std::size_t r = 0; r < rows.size(); ++r) block.row(r) = raw.block(rows[r], j * fpj, 1, fpj);
+        block.rowwise() -= block.colwise().mean();
+        const Eigen::JacobiSVD<Eigen::MatrixXd> svd(block, Eigen::ComputeFullV);
+        const Eigen::VectorXd& sv = svd.singularValues();
+        int kept = 0;
+        const double largest = sv.size() ? sv[0] : 0.0;
+        while (kept < sv.size() && sv[kept] > 1e-12 * largest && sv[kept] >= tolerance * largest) ++kept;
+        for (int c = 0; c < kept; ++c)
+            for (int a = 0; a < fpj; ++a) model.feature_basis.push_back(float(svd.matrixV()(a, c)));
+        model.feature_offsets.push_back(model.feature_offsets.back() + std::uint32_t(kept));
+        shape.feature_start.push_back(shape.feature_start.back() + std::size_t(kept));
+        joints[active[j]].feature_directions = kept;
+    }
+    shape.k = shape.feature_start.back();
+}
+
+// The pose matrix A (F × k, without its bias column): each joint's raw
+// features projected on its directions (the basis in float, as the run time
+// applies it).
+Eigen::MatrixXd pose_matrix(const Eigen::MatrixXd& raw, const FitShape& shape, const PoseModel& model) {
+    Eigen::MatrixXd A(raw.rows(), Eigen::Index(shape.k));
+    const int fpj = shape.fpj;
+    for (std::size_t j = 0; j < shape.joints(); ++j) {
+        const Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> basis(
+            model.feature_basis.data() + std::size_t(shape.first(j)) * fpj, shape.count(j), fpj);
+        A.middleCols(shape.first(j), shape.count(j)) = raw.middleCols(Eigen::Index(j) * fpj, fpj) *
+                                                      basis.cast<double>().transpose();
+    }
     return A;
 }
 
@@ -338,10 +448,18 @@ struct RidgeSolver {
     }
 };
 
-// A model as stored, per vertex: the joints kept (none: a constant vertex)
+// One joint block of a vertex: the joint and how many of its leading
+// feature directions the vertex keeps.
+struct KeptBlock {
+    std::uint16_t joint;
+    std::uint8_t directions;
+};
+using KeptBlocks = std::vector<std::vector<KeptBlock>>;
+
+// A model as stored, per vertex: the blocks kept (none: a constant vertex)
 // and the bias with the feature means folded in.
 struct PrunedModel {
-    std::vector<std::vector<std::uint16_t>> kept;
+    KeptBlocks kept;
     std::vector<float> bias;
 };
 
@@ -355,15 +473,14 @@ public:
     RidgeSolver solver(const std::vector<std::size_t>& rows) const;
     // Errors of lobe parameters predicted for `rows` (rows.size() × V·d) against their baked SH.
     Errors predicted_errors(const std::vector<std::size_t>& rows, const Eigen::MatrixXf& predicted) const;
-    // Per vertex: constant, or the joints that matter (decided on `rows`,
+    // Per vertex: constant, or the joint directions that matter (decided on `rows`,
     // the frames the solver was fitted on, or given as `decided`), and the
     // bias. W: the solver's ridge weights (k × V·d); the blocks kept are
     // rounded in place to their stored form (weight_blocks.hpp) before the
     // bias is folded, so the bias absorbs the rounding at the mean pose and
     // errors measured with W afterwards are the stored model's.
     PrunedModel prune(const std::vector<std::size_t>& rows, const RidgeSolver& sol, Eigen::MatrixXf& W,
-                      const std::vector<std::vector<std::uint16_t>>* decided, const Progress& progress, double from,
-                      double to) const;
+                      const KeptBlocks* decided, const Progress& progress, double from, double to) const;
     // Errors of a pruned model (as stored) on frames it was not fitted on.
     Errors pruned_errors(const PrunedModel& pruned, const Eigen::MatrixXf& W,
                          const std::vector<std::size_t>& rows) const;
@@ -372,12 +489,13 @@ private:
     // Scratch of one pruning worker.
     struct PruneScratch {
         Eigen::MatrixXd dropped, trial;
-        std::vector<Eigen::MatrixXd> parts;
-        std::vector<std::pair<double, std::size_t>> norms;
+        std::vector<Eigen::MatrixXd> parts;  // per pose feature (joint direction)
+        std::vector<double> norms;
+        std::vector<int> directions;         // per joint, kept so far
     };
     void prune_vertex(std::size_t v, const std::vector<std::size_t>& rows, const RidgeSolver& sol,
                       const Eigen::MatrixXf& W, const Eigen::MatrixXd& Ac, PruneScratch& scratch,
-                      std::vector<std::uint16_t>& keep) const;
+                      std::vector<KeptBlock>& keep) const;
 
     const TrainingSet& set_;
     const FitSettings& settings_;
@@ -428,65 +546,82 @@ Errors LinearFit::predicted_errors(const std::vector<std::size_t>& rows, const E
 }
 
 // One vertex: constant when its parameters vary less than
-// constant_tolerance (RMS); otherwise its joints' contributions, smallest
-// first, are dropped while the dropped part stays under prune_tolerance.
+// constant_tolerance (RMS); otherwise the contributions of its joints'
+// feature directions are dropped, smallest first, while the dropped part
+// stays under prune_tolerance. A joint's directions go from its last (the
+// least moving) to its first, so what a vertex keeps of a joint is always
+// its leading directions (a block of the stored model): each step drops the
+// smallest of the joints' last kept parts.
 void LinearFit::prune_vertex(std::size_t v, const std::vector<std::size_t>& rows, const RidgeSolver& sol,
                              const Eigen::MatrixXf& W, const Eigen::MatrixXd& Ac, PruneScratch& scratch,
-                             std::vector<std::uint16_t>& keep) const {
-    const std::size_t R = rows.size(), n_active = scratch.parts.size();
-    const int d = shape_.d, fpj = shape_.fpj;
+                             std::vector<KeptBlock>& keep) const {
+    const std::size_t R = rows.size(), n_active = shape_.joints();
+    const int d = shape_.d;
     const Eigen::RowVectorXd mean = sol.b_mean.segment(v * d, d).cast<double>();
     double variation = 0.0;
     for (std::size_t r = 0; r < R; ++r)
         for (int i = 0; i < d; ++i) variation += std::pow(double(B_(rows[r], v * d + i)) - mean[i], 2);
     variation = std::sqrt(variation / double(R * d));
-    if (shape_.k && variation > settings_.constant_tolerance) {
-        const Eigen::MatrixXd Wv = W.middleCols(v * d, d).cast<double>();
-        for (std::size_t j = 0; j < n_active; ++j) {
-            scratch.parts[j] = Ac.middleCols(j * fpj, fpj) * Wv.middleRows(j * fpj, fpj);
-            scratch.norms[j] = {scratch.parts[j].squaredNorm(), j};
-        }
-        std::sort(scratch.norms.begin(), scratch.norms.end());
-        scratch.dropped.setZero();
-        std::size_t first_kept = 0;
-        for (; first_kept < n_active; ++first_kept) {
-            scratch.trial = scratch.dropped + scratch.parts[scratch.norms[first_kept].second];
-            if (std::sqrt(scratch.trial.squaredNorm() / double(R * d)) > settings_.prune_tolerance) break;
-            scratch.dropped = scratch.trial;
-        }
-        for (std::size_t e = first_kept; e < n_active; ++e) keep.push_back(std::uint16_t(scratch.norms[e].second));
-        std::sort(keep.begin(), keep.end());
+    if (!shape_.k || variation <= settings_.constant_tolerance) return;
+    const Eigen::MatrixXd Wv = W.middleCols(v * d, d).cast<double>();
+    for (std::size_t c = 0; c < shape_.k; ++c) {
+        scratch.parts[c].noalias() = Ac.col(Eigen::Index(c)) * Wv.row(Eigen::Index(c));
+        scratch.norms[c] = scratch.parts[c].squaredNorm();
     }
+    for (std::size_t j = 0; j < n_active; ++j) scratch.directions[j] = int(shape_.count(j));
+    scratch.dropped.setZero();
+    for (;;) {
+        std::size_t best = n_active;
+        double best_norm = std::numeric_limits<double>::infinity();
+        for (std::size_t j = 0; j < n_active; ++j) {
+            if (scratch.directions[j] == 0) continue;
+            const double norm = scratch.norms[std::size_t(shape_.first(j)) + scratch.directions[j] - 1];
+            if (norm < best_norm) {
+                best_norm = norm;
+                best = j;
+            }
+        }
+        if (best == n_active) break;
+        scratch.trial = scratch.dropped + scratch.parts[std::size_t(shape_.first(best)) + scratch.directions[best] - 1];
+        if (std::sqrt(scratch.trial.squaredNorm() / double(R * d)) > settings_.prune_tolerance) break;
+        scratch.dropped = scratch.trial;
+        --scratch.directions[best];
+    }
+    for (std::size_t j = 0; j < n_active; ++j)
+        if (scratch.directions[j] > 0) keep.push_back({std::uint16_t(j), std::uint8_t(scratch.directions[j])});
 }
 
 PrunedModel LinearFit::prune(const std::vector<std::size_t>& rows, const RidgeSolver& sol, Eigen::MatrixXf& W,
-                             const std::vector<std::vector<std::uint16_t>>* decided, const Progress& progress,
-                             double from, double to) const {
-    const std::size_t R = rows.size(), n_active = shape_.k / shape_.fpj;
-    const int d = shape_.d, fpj = shape_.fpj;
+                             const KeptBlocks* decided, const Progress& progress, double from, double to) const {
+    const std::size_t R = rows.size(), n_active = shape_.joints();
+    const int d = shape_.d;
     PrunedModel out;
-    out.kept = decided ? *decided : std::vector<std::vector<std::uint16_t>>(shape_.V);
+    out.kept = decided ? *decided : KeptBlocks(shape_.V);
     out.bias.assign(shape_.V * d, 0.0f);
     Eigen::MatrixXd Ac(R, shape_.k);
     for (std::size_t r = 0; r < R; ++r) Ac.row(r) = A_.row(rows[r]);
     if (shape_.k) Ac.rowwise() -= sol.feature_mean.transpose();
     parallel_for(shape_.V, {settings_.threads, 64, "visibility.prune", from, to}, [&](std::size_t begin,
                                                                                      std::size_t end) {
-        PruneScratch scratch{Eigen::MatrixXd(R, d), Eigen::MatrixXd(R, d), std::vector<Eigen::MatrixXd>(n_active),
-                             std::vector<std::pair<double, std::size_t>>(n_active)};
-        std::vector<float> block(std::size_t(fpj) * d);
+        PruneScratch scratch{Eigen::MatrixXd(R, d), Eigen::MatrixXd(R, d),
+                             std::vector<Eigen::MatrixXd>(shape_.k, Eigen::MatrixXd(R, d)),
+                             std::vector<double>(shape_.k), std::vector<int>(n_active)};
+        std::vector<float> block(std::size_t(shape_.fpj) * d);
         for (std::size_t v = begin; v < end; ++v) {
             if (!decided) prune_vertex(v, rows, sol, W, Ac, scratch, out.kept[v]);
-            for (auto j : out.kept[v]) {  // columns of vertex v only: no other task touches them
-                auto stored = W.block(j * fpj, v * d, fpj, d);
-                Eigen::Map<Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(block.data(), fpj, d) = stored;
-                round_weight_block(block.data(), block.size());
-                stored = Eigen::Map<const Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(block.data(), fpj, d);
+            for (const KeptBlock& b : out.kept[v]) {  // columns of vertex v only: no other task touches them
+                const Eigen::Index m = b.directions;
+                auto stored = W.block(shape_.first(b.joint), v * d, m, d);
+                Eigen::Map<Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> copy(block.data(), m, d);
+                copy = stored;
+                round_weight_block(block.data(), std::size_t(m) * d);
+                stored = copy;
             }
             // Bias with the feature means folded in: params = bias + Σ φ_j W_j.
             Eigen::RowVectorXd bias = sol.b_mean.segment(v * d, d).cast<double>();
-            for (auto j : out.kept[v])
-                bias -= sol.feature_mean.segment(j * fpj, fpj).transpose() * W.block(j * fpj, v * d, fpj, d).cast<double>();
+            for (const KeptBlock& b : out.kept[v])
+                bias -= sol.feature_mean.segment(shape_.first(b.joint), b.directions).transpose() *
+                        W.block(shape_.first(b.joint), v * d, b.directions, d).cast<double>();
             for (int i = 0; i < d; ++i) out.bias[v * d + i] = float(bias[i]);
         }
     }, progress);
@@ -495,7 +630,7 @@ PrunedModel LinearFit::prune(const std::vector<std::size_t>& rows, const RidgeSo
 
 Errors LinearFit::pruned_errors(const PrunedModel& pruned, const Eigen::MatrixXf& W,
                                 const std::vector<std::size_t>& rows) const {
-    const int order = shape_.order, n_sh = shape_.n_sh, d = shape_.d, fpj = shape_.fpj;
+    const int order = shape_.order, n_sh = shape_.n_sh, d = shape_.d;
     const Eigen::Index R = Eigen::Index(rows.size());
     Eigen::MatrixXd features(R, shape_.k);
     for (Eigen::Index r = 0; r < R; ++r) features.row(r) = A_.row(rows[r]);
@@ -509,9 +644,9 @@ Errors LinearFit::pruned_errors(const PrunedModel& pruned, const Eigen::MatrixXf
         for (std::size_t v = begin; v < end; ++v) {
             // params = bias + Σ over kept joints φ_j W_j, every row at once.
             for (int i = 0; i < d; ++i) params.col(i).setConstant(pruned.bias[v * d + i]);
-            for (auto j : pruned.kept[v])
-                params.noalias() += features.middleCols(j * fpj, fpj) *
-                                    W.block(j * fpj, Eigen::Index(v * d), fpj, d).cast<double>();
+            for (const KeptBlock& b : pruned.kept[v])
+                params.noalias() += features.middleCols(shape_.first(b.joint), b.directions) *
+                                    W.block(shape_.first(b.joint), Eigen::Index(v * d), b.directions, d).cast<double>();
             for (Eigen::Index r = 0; r < R; ++r) {
                 for (int i = 0; i < d; ++i) row[i] = params(r, i);
                 lobes_to_sh(order, shape_.lobes, row.data(), sh.data());
@@ -541,7 +676,7 @@ void split_frames(std::size_t F, int stride, std::vector<std::size_t>& train, st
 // Without held-out frames ρ = 1e-4 and `kept` stays empty. Progress 0.8 → 0.9.
 double choose_ridge(const LinearFit& fit, const Eigen::MatrixXd& A, const Eigen::MatrixXf& B, const FitShape& shape,
                     const std::vector<std::size_t>& train, const std::vector<std::size_t>& holdout, int threads,
-                    const Progress& progress, FitReport& report, std::vector<std::vector<std::uint16_t>>& kept) {
+                    const Progress& progress, FitReport& report, KeptBlocks& kept) {
     double rho = 1e-4;
     if (holdout.empty()) return rho;
     const std::size_t k = shape.k, H = holdout.size();
@@ -583,8 +718,8 @@ void store_model(const TrainingSet& set, const FitSettings& settings, const FitS
                  const std::vector<std::size_t>& active, PrunedModel& pruned, const Eigen::MatrixXf& W,
                  PoseModel& model, FitReport& report) {
     const std::size_t V = shape.V;
-    const int d = shape.d, fpj = shape.fpj;
-    const std::vector<std::vector<std::uint16_t>>& kept = pruned.kept;
+    const int d = shape.d;
+    const KeptBlocks& kept = pruned.kept;
     model.bias = std::move(pruned.bias);
     model.order = shape.order;
     model.lobes = shape.lobes;
@@ -602,18 +737,21 @@ void store_model(const TrainingSet& set, const FitSettings& settings, const FitS
     }
     model.joint_index.reserve(model.joint_offsets[V]);
     std::vector<float> weights;
-    weights.reserve(std::size_t(model.joint_offsets[V]) * fpj * d);
     for (std::size_t v = 0; v < V; ++v)
-        for (auto j : kept[v]) {
-            model.joint_index.push_back(j);
-            for (int a = 0; a < fpj; ++a)
-                for (int i = 0; i < d; ++i) weights.push_back(W(j * fpj + a, v * d + i));
+        for (const KeptBlock& b : kept[v]) {
+            model.joint_index.push_back(b.joint);
+            model.block_directions.push_back(b.directions);
+            for (Eigen::Index a = shape.first(b.joint); a < shape.first(b.joint) + b.directions; ++a)
+                for (int i = 0; i < d; ++i) weights.push_back(W(a, v * d + i));
         }
     set_weights(model, weights);  // W's kept blocks are already rounded (prune): this packs them exactly
     report.stored_joint_blocks = model.joint_index.size();
+    report.stored_directions = model.weights.size() / std::size_t(d);
     report.model_bytes = 4 * model.joint_offsets.size() + 2 * model.joint_index.size() + 4 * model.bias.size() +
-                         2 * model.weights.size() + 4 * model.weight_scales.size();
-    report.dense_bytes = 4 * std::size_t(d) * (shape.k + 1) * V;
+                         8 * model.weight_offsets.size() + 2 * model.weights.size() + 4 * model.weight_scales.size() +
+                         model.block_directions.size() +
+                         4 * model.feature_offsets.size() + 4 * model.feature_basis.size();
+    report.dense_bytes = 4 * std::size_t(d) * (active.size() * shape.fpj + 1) * V;
 }
 
 // The report's numbers, stored with the model as (name, value).
@@ -676,16 +814,20 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
     for (std::size_t b = 0; b < report.joints.size(); ++b)
         if (report.joints[b].active) active.push_back(b);
     if (active.size() > 65535) throw ArgumentError("too many active joints");
-    shape.k = active.size() * shape.fpj;
-    const Eigen::MatrixXd A = pose_matrix(set, active, settings.features, shape);
+    std::vector<std::size_t> train, holdout;
+    split_frames(shape.F, settings.holdout_stride, train, holdout);
+    // Each joint's feature directions, decided on the training frames like
+    // everything the held-out error measures.
+    PoseModel model;
+    const Eigen::MatrixXd raw = raw_pose_matrix(set, active, settings.features, shape.fpj);
+    choose_joint_features(raw, train, active, settings.feature_tolerance, shape, model, report.joints);
+    const Eigen::MatrixXd A = pose_matrix(raw, shape, model);
     const LinearFit fit(set, settings, shape, A, B);
 
     // λ from the held-out frames, then the refit on every frame.
-    std::vector<std::size_t> train, holdout;
-    split_frames(shape.F, settings.holdout_stride, train, holdout);
     report.training_frames = shape.F;
     report.holdout_frames = holdout.size();
-    std::vector<std::vector<std::uint16_t>> kept;
+    KeptBlocks kept;
     const double rho = choose_ridge(fit, A, B, shape, train, holdout, settings.threads, progress, report, kept);
     report.ridge_relative = rho;
     std::vector<std::size_t> all(shape.F);
@@ -696,7 +838,6 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
 
     // Pruned, as stored: with the joints decided without the held-out
     // frames (what model_holdout measured), or on every frame when none.
-    PoseModel model;
     PrunedModel pruned = fit.prune(all, sol, W, kept.empty() ? nullptr : &kept, progress, 0.9, 0.95);
     report.model_training = fit.pruned_errors(pruned, W, all);
     store_model(set, settings, shape, active, pruned, W, model, report);
@@ -713,35 +854,46 @@ void synthesize_params(const PoseModel& model, const float* joint_rotations, flo
 
 std::vector<float> pose_features(const PoseModel& model, const float* joint_rotations) {
     const int fpj = features_per_joint(model.features);
-    std::vector<double> phi(model.joints.size() * fpj);
+    std::vector<float> out(model.feature_offsets.back());
     for (std::size_t j = 0; j < model.joints.size(); ++j) {
         for (int k = 0; k < 9; ++k)
             if (!std::isfinite(joint_rotations[9 * j + k]))
                 throw ArgumentError("joint rotation of '" + model.joints[j] + "' is not finite");
-        joint_features(model.features, joint_rotations + 9 * j, phi.data() + j * fpj);
+        double phi[9];
+        joint_features(model.features, joint_rotations + 9 * j, phi);
+        // Projected on the joint's directions in double; single precision
+        // after, like the stored weights and the output: at most a few dozen
+        // products per parameter, and the loop vectorizes.
+        for (std::uint32_t r = model.feature_offsets[j]; r < model.feature_offsets[j + 1]; ++r) {
+            double z = 0.0;
+            for (int a = 0; a < fpj; ++a) z += double(model.feature_basis[std::size_t(r) * fpj + a]) * phi[a];
+            out[r] = float(z);
+        }
     }
-    // Single precision, like the stored weights and the output: at most a few
-    // dozen products per parameter, and the loop vectorizes.
-    return std::vector<float>(phi.begin(), phi.end());
+    return out;
 }
+
+namespace {
+
+detail::PoseBlocks pose_blocks(const PoseModel& model) {
+    return {model.params_per_vertex(), model.feature_offsets.data(), model.joint_offsets.data(),
+            model.joint_index.data(),  model.block_directions.data(), model.weight_offsets.data(),
+            model.bias.data(),         model.weights.data(),          model.weight_scales.data()};
+}
+
+}  // namespace
 
 void synthesize_range(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
                       float* params_out) {
     // A vertex the model stores as constant has no joint blocks: its
     // parameters are the bias alone. The loop is runtime_kernel.cpp's (SIMD
     // targets chosen at run time).
-    detail::synthesize_range(model.params_per_vertex(), features_per_joint(model.features), model.joint_offsets.data(),
-                             model.joint_index.data(), model.bias.data(), model.weights.data(),
-                             model.weight_scales.data(), features, begin, end,
-                             params_out);
+    detail::synthesize_range(pose_blocks(model), features, begin, end, params_out);
 }
 
 void synthesize_rows(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
                      float* params_out, std::size_t stride) {
-    detail::synthesize_range(model.params_per_vertex(), features_per_joint(model.features), model.joint_offsets.data(),
-                             model.joint_index.data(), model.bias.data(), model.weights.data(),
-                             model.weight_scales.data(), features, begin, end,
-                             params_out, std::max<std::size_t>(stride, 1));
+    detail::synthesize_range(pose_blocks(model), features, begin, end, params_out, std::max<std::size_t>(stride, 1));
 }
 
 void synthesize_lobes(const PoseModel& model, const float* joint_rotations, float* params_out, float* axes_out,

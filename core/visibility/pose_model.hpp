@@ -13,6 +13,16 @@
 // them; the rotation vector is 3 numbers instead of 9 and is continuous for
 // rotations below π. A bias column (the constant 1) completes A.
 //
+// Joint features. A joint rarely moves along all its feature directions: a
+// knee or an elbow is a hinge (its R − I spans 2 dimensions), a shoulder
+// moves mostly along 3 or 4. Each joint's raw features are projected on the
+// principal directions it moved along over the training frames (those whose
+// singular value is at least feature_tolerance times the joint's largest),
+// and the model is linear in those projections: every stored weight block is
+// that many rows instead of 9. Ridge would have shrunk the dropped
+// directions almost to nothing anyway; dropping them makes the model and
+// the run time's read smaller.
+//
 // Active joints (the paper's j): bones that rotate by more than a tolerance
 // over the training frames AND move part of this mesh relative to the rest
 // of it (a bone that deforms no vertex, directly or through its children,
@@ -30,11 +40,14 @@
 //
 // Model only what the scene requires: a vertex whose lobe parameters vary by
 // less than constant_tolerance (RMS) over the training frames stores a
-// constant; for the others, joints whose contribution is small are dropped
-// greedily (smallest first) while the dropped part stays under
-// prune_tolerance (RMS over the training frames). Both are decided once, on
+// constant; for the others, joint directions whose contribution is small
+// are dropped greedily (smallest first, a joint's last direction before its
+// earlier ones, so that a vertex keeps of each joint its leading directions)
+// while the dropped part stays under prune_tolerance (RMS over the training
+// frames). Both are decided once, on
 // the frames that are not held out (the model the held-out error measures),
-// and the model refitted on every frame keeps those joints.
+// and the model refitted on every frame keeps those joints. The joint
+// feature directions too are decided on those frames.
 #pragma once
 
 #include <cstdint>
@@ -70,6 +83,7 @@ struct JointChoice {
     std::string name;
     bool active = false;
     double max_angle_degrees = 0.0;  // largest rotation away from the first training frame
+    int feature_directions = 0;      // active joints: the feature directions kept (FitSettings::feature_tolerance)
     std::string reason;              // why kept or dropped
 };
 
@@ -83,7 +97,11 @@ struct FitSettings {
     double joint_tolerance_degrees = 1.0;
     int holdout_stride = 4;              // every k-th frame held out to choose λ; 0: none
     double constant_tolerance = 0.01;    // RMS lobe-parameter variation under which a vertex is constant
-    double prune_tolerance = 0.01;       // RMS lobe-parameter change allowed by per-vertex joint pruning
+    double prune_tolerance = 0.01;       // RMS lobe-parameter change allowed by per-vertex pruning of joint directions
+    // A joint's feature direction is kept when its singular value over the
+    // training frames is at least this fraction of the joint's largest (0:
+    // every direction with any movement).
+    double feature_tolerance = 0.03;
     int zh_iterations = 8;       // Levenberg–Marquardt iterations of each vertex's reference fit
     // ... and of each (vertex, frame) fit, which starts from the reference
     // axes: on the humanoid (docs/visibility-humanoid-benchmark.md) 2 fit the
@@ -126,6 +144,7 @@ struct FitReport {
     std::vector<std::pair<double, double>> ridge_curve;
     std::size_t constant_vertices = 0;
     std::size_t stored_joint_blocks = 0;   // Σ over vertices of joints kept
+    std::size_t stored_directions = 0;     // Σ over blocks of the joint directions kept
     std::size_t model_bytes = 0;           // stored payload
     std::size_t dense_bytes = 0;           // float32 d·(features·j + 1)·v, as the paper's O(djv)
     double seconds_zh_fit = 0.0, seconds_linear = 0.0;
@@ -141,29 +160,51 @@ struct PoseModel {
     std::uint64_t topology_hash = 0;
     std::vector<std::string> armature_bones;  // every bone of the armature at bake time
     std::vector<std::string> joints;          // active joints, in pose-vector order
-    // Per vertex v: params = bias[v] + Σ_{e in [offsets[v], offsets[v+1])}
-    //   features(joint_index[e]) · weight_scales[e] · weights[e] (features_per_joint × d),
-    // the weights stored as binary16 with a power-of-two scale per block
-    // (weight_blocks.hpp; set_weights packs floats, weight_values unpacks).
+    // Joint j's features: the raw features (features_per_joint of them)
+    // projected on rows [feature_offsets[j], feature_offsets[j + 1]) of
+    // feature_basis (unit rows of features_per_joint floats); m_j of them.
+    std::vector<std::uint32_t> feature_offsets;  // joints + 1
+    std::vector<float> feature_basis;            // feature_offsets.back() × features_per_joint
+    // Per vertex v: params = bias[v] + Σ_{e in [joint_offsets[v], joint_offsets[v+1])}
+    //   (the first c_e = block_directions[e] features of joint_index[e]) ·
+    //   weight_scales[e] · block e (c_e × d),
+    // the blocks one after another from weights[weight_offsets[v]], stored
+    // as binary16 with a power-of-two scale per block (weight_blocks.hpp;
+    // set_weights packs floats and sets weight_offsets, weight_values
+    // unpacks).
     std::vector<std::uint32_t> joint_offsets;  // vertex_count + 1
     std::vector<std::uint16_t> joint_index;
+    std::vector<std::uint8_t> block_directions;  // per block: c_e, 1..m_j
     std::vector<float> bias;                   // vertex_count × d
-    std::vector<std::uint16_t> weights;        // blocks × features_per_joint × d, binary16 bits
+    std::vector<std::uint64_t> weight_offsets; // vertex_count + 1
+    std::vector<std::uint16_t> weights;        // Σ over blocks of c_e × d, binary16 bits
     std::vector<float> weight_scales;          // blocks
     // Summary of the bake, stored with the model (name, value).
     std::vector<std::pair<std::string, double>> summary;
 
     int params_per_vertex() const { return lobes * params_per_lobe(order); }
+    // m_j: how many features joint j has.
+    int joint_feature_count(std::size_t j) const { return int(feature_offsets[j + 1] - feature_offsets[j]); }
 };
 
 // Throws ArgumentError when the model is inconsistent (sizes, indices).
 void check_pose_model(const PoseModel& model);
 
-// The model's weights from floats (blocks × features_per_joint × d, as the
-// joint blocks run; the joint offsets and indices set first), rounded to the
-// stored form; and back to floats.
+// Every joint's features as they come (R − I or the rotation vector): an
+// identity basis, as models before the joint feature directions had, every
+// block keeping all of them (the joints and blocks set first).
+void use_raw_joint_features(PoseModel& model);
+
+// The model's weights from floats (block after block, c_e × d each, as the
+// joint offsets, indices and block directions give them; those and the
+// feature offsets set first), rounded to the stored form, with
+// weight_offsets; and back to floats.
 void set_weights(PoseModel& model, const std::vector<float>& weights);
 std::vector<float> weight_values(const PoseModel& model);
+// Sets weight_offsets from the joint offsets and block directions
+// (ArgumentError when those are inconsistent): what a reader of the stored
+// blocks needs.
+void index_weight_blocks(PoseModel& model);
 
 PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence>& influence,
                          const FitSettings& settings, const Progress& progress = {}, FitReport* report = nullptr);
@@ -173,7 +214,7 @@ PoseModel fit_pose_model(const TrainingSet& set, const std::vector<BoneInfluence
 void synthesize_params(const PoseModel& model, const float* joint_rotations, float* params_out, int threads = 0);
 
 // The steps of synthesize_params for callers that fuse them with their own
-// per-vertex work: the pose's features (joints × features_per_joint, float;
+// per-vertex work: the pose's features (Σ m_j floats, joint after joint;
 // ArgumentError for a non-finite rotation), then the parameters of vertices
 // [begin, end), written from params_out[0] on.
 std::vector<float> pose_features(const PoseModel& model, const float* joint_rotations);

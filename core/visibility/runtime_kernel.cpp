@@ -427,70 +427,105 @@ PENUMBRA_LANES_INLINE Quad load_half_quad(const std::uint16_t* p) {
 #endif
 }
 
+#if HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2
+// AVX2 and AVX-512 (F16C): eight lanes a row where the parameters allow,
+// the conversion reading memory itself; a row of 12 is then one
+// conversion and one fused multiply-add of 8 lanes plus one of 4 instead of
+// three of 4, and the loop is the pass's one stream from memory
+// (docs/visibility-benchmark.md).
+typedef float Oct __attribute__((vector_size(8 * sizeof(float))));
+constexpr bool kOctets = true;
+PENUMBRA_LANES_INLINE Oct load_half_oct(const std::uint16_t* p) {
+    return Oct(_mm256_cvtph_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p))));
+}
+PENUMBRA_LANES_INLINE Oct multiply_add(Oct a, Oct b, Oct acc) { return Oct(_mm256_fmadd_ps(__m256(a), __m256(b), __m256(acc))); }
+#else
+typedef Quad Oct;  // unused
+constexpr bool kOctets = false;
+PENUMBRA_LANES_INLINE Oct load_half_oct(const std::uint16_t* p) { return load_half_quad(p); }
+#endif
+
+// D parameters per vertex (a multiple of 4): the accumulator, groups of 8
+// lanes where the target has them, then groups of 4.
 template <int D>
-void synthesize_fixed(int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index, const float* bias,
-                      const std::uint16_t* weights, const float* scales, const float* features, std::size_t begin,
-                      std::size_t end, float* params_out, std::size_t stride) {
+struct Accumulator {
+    static constexpr int kOcts = kOctets ? D / 8 : 0;
+    static constexpr int kQuads = (D - 8 * kOcts) / 4;
+    Oct oct[kOcts > 0 ? kOcts : 1];
+    Quad quad[kQuads > 0 ? kQuads : 1];
+
+    PENUMBRA_LANES_INLINE void load(const float* p) {
+        for (int o = 0; o < kOcts; ++o) std::memcpy(&oct[o], p + 8 * o, sizeof(Oct));
+        for (int q = 0; q < kQuads; ++q) quad[q] = load_quad(p + 8 * kOcts + 4 * q);
+    }
+    // += feature · the row of D binary16 weights at w.
+    PENUMBRA_LANES_INLINE void add(float feature, const std::uint16_t* w) {
+        if constexpr (kOcts > 0) {
+            const Oct f8 = feature - Oct{};
+            for (int o = 0; o < kOcts; ++o) oct[o] = multiply_add(f8, load_half_oct(w + 8 * o), oct[o]);
+        }
+        const Quad f4 = feature - Quad{};
+        for (int q = 0; q < kQuads; ++q) quad[q] = multiply_add(f4, load_half_quad(w + 8 * kOcts + 4 * q), quad[q]);
+    }
+    PENUMBRA_LANES_INLINE void store(float* out) const {
+        for (int o = 0; o < kOcts; ++o) std::memcpy(out + 8 * o, &oct[o], sizeof(Oct));
+        for (int q = 0; q < kQuads; ++q) std::memcpy(out + 8 * kOcts + 4 * q, &quad[q], sizeof(Quad));
+    }
+};
+
+template <int D>
+void synthesize_fixed(const PoseBlocks& b, const float* features, std::size_t begin, std::size_t end,
+                      float* params_out, std::size_t stride) {
     static_assert(D % 4 == 0);
-    constexpr int kQuads = D / 4;
+    const std::uint16_t* w = b.weights + b.weight_offsets[begin];
     for (std::size_t v = begin; v < end; ++v) {
-        Quad acc[kQuads];
-        for (int q = 0; q < kQuads; ++q) acc[q] = load_quad(bias + v * D + 4 * q);
-        for (std::uint32_t e = offsets[v]; e < offsets[v + 1]; ++e) {
-            const float* f = features + std::size_t(joint_index[e]) * fpj;
-            const std::uint16_t* w = weights + std::size_t(e) * fpj * D;
+        Accumulator<D> acc;
+        acc.load(b.bias + v * D);
+        for (std::uint32_t e = b.joint_offsets[v]; e < b.joint_offsets[v + 1]; ++e) {
+            const float* f = features + b.feature_offsets[b.joint_index[e]];
+            const int m = b.block_directions[e];
             // The block's scale goes on the feature: one product per feature,
             // exact (a power of two).
-            const float scale = scales[e];
-            for (int a = 0; a < fpj; ++a) {
-                const Quad fa = f[a] * scale - Quad{};
-                for (int q = 0; q < kQuads; ++q)
-                    acc[q] = multiply_add(fa, load_half_quad(w + a * D + 4 * q), acc[q]);
-            }
+            const float scale = b.scales[e];
+            for (int a = 0; a < m; ++a, w += D) acc.add(f[a] * scale, w);
         }
         if (!stride) {
-            std::memcpy(params_out + (v - begin) * D, acc, sizeof acc);
+            acc.store(params_out + (v - begin) * D);
             continue;
         }
         float values[D];
-        std::memcpy(values, acc, sizeof acc);
+        acc.store(values);
         for (int i = 0; i < D; ++i) params_out[i * stride + (v - begin)] = values[i];
     }
 }
 
-void synthesize_any(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index, const float* bias,
-                    const std::uint16_t* weights, const float* scales, const float* features, std::size_t begin,
-                    std::size_t end, float* params_out, std::size_t stride) {
+void synthesize_any(const PoseBlocks& b, const float* features, std::size_t begin, std::size_t end,
+                    float* params_out, std::size_t stride) {
+    const int d = b.d;
+    const std::uint16_t* w = b.weights + b.weight_offsets[begin];
     for (std::size_t v = begin; v < end; ++v) {
         // Column v − begin of the rows, or the vertex's d values.
         const std::size_t step = stride ? stride : 1;
         float* acc = params_out + (stride ? v - begin : (v - begin) * d);
-        for (int i = 0; i < d; ++i) acc[i * step] = bias[v * d + i];
-        for (std::uint32_t e = offsets[v]; e < offsets[v + 1]; ++e) {
-            const float* f = features + std::size_t(joint_index[e]) * fpj;
-            const std::uint16_t* w = weights + std::size_t(e) * fpj * d;
-            for (int a = 0; a < fpj; ++a) {
-                const float fa = f[a] * scales[e];
-                for (int i = 0; i < d; ++i) acc[i * step] = multiply_add(fa, load_half(w + a * d + i), acc[i * step]);
+        for (int i = 0; i < d; ++i) acc[i * step] = b.bias[v * d + i];
+        for (std::uint32_t e = b.joint_offsets[v]; e < b.joint_offsets[v + 1]; ++e) {
+            const std::uint32_t first = b.feature_offsets[b.joint_index[e]];
+            const int m = b.block_directions[e];
+            for (int a = 0; a < m; ++a, w += d) {
+                const float fa = features[first + a] * b.scales[e];
+                for (int i = 0; i < d; ++i) acc[i * step] = multiply_add(fa, load_half(w + i), acc[i * step]);
             }
         }
     }
 }
 
-void synthesize_range(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index,
-                      const float* bias, const std::uint16_t* weights, const float* scales, const float* features,
-                      std::size_t begin, std::size_t end, float* params_out, std::size_t stride) {
+void synthesize_range(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
+                      float* params_out, std::size_t stride) {
     // 2 and 4 lobes at order 4 (2 + 4 parameters per lobe), the usual models.
-    switch (d) {
-        case 12:
-            return synthesize_fixed<12>(fpj, offsets, joint_index, bias, weights, scales, features, begin, end,
-                                        params_out, stride);
-        case 24:
-            return synthesize_fixed<24>(fpj, offsets, joint_index, bias, weights, scales, features, begin, end,
-                                        params_out, stride);
-        default:
-            return synthesize_any(d, fpj, offsets, joint_index, bias, weights, scales, features, begin, end,
-                                  params_out, stride);
+    switch (blocks.d) {
+        case 12: return synthesize_fixed<12>(blocks, features, begin, end, params_out, stride);
+        case 24: return synthesize_fixed<24>(blocks, features, begin, end, params_out, stride);
+        default: return synthesize_any(blocks, features, begin, end, params_out, stride);
     }
 }
 
@@ -508,11 +543,9 @@ HWY_EXPORT(lobes_from_params);
 HWY_EXPORT(frames_range);
 HWY_EXPORT(synthesize_range);
 
-void synthesize_range(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index,
-                      const float* bias, const std::uint16_t* weights, const float* scales, const float* features,
-                      std::size_t begin, std::size_t end, float* params_out, std::size_t stride) {
-    HWY_DYNAMIC_DISPATCH(synthesize_range)(d, fpj, offsets, joint_index, bias, weights, scales, features, begin, end,
-                                           params_out, stride);
+void synthesize_range(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
+                      float* params_out, std::size_t stride) {
+    HWY_DYNAMIC_DISPATCH(synthesize_range)(blocks, features, begin, end, params_out, stride);
 }
 
 void face_normals_range(const std::uint32_t* face_start, const std::uint32_t* corner_vertex, const float* positions,

@@ -67,17 +67,29 @@ void frames_range(const FrameTransform& transform, const NormalSources& sources,
 // params_to_lobes.
 void lobes_from_params(int order, std::size_t count, const float* params, float* axes_out, float* bands_out);
 
+// The pose model's arrays the synthesis reads (pose_model.hpp's PoseModel).
+struct PoseBlocks {
+    int d;                                // lobe parameters per vertex
+    const std::uint32_t* feature_offsets;  // per joint: its features (m_j of them)
+    const std::uint32_t* joint_offsets;    // per vertex: its blocks
+    const std::uint16_t* joint_index;      // per block: its joint
+    const std::uint8_t* block_directions;  // per block: how many of its joint's features it weighs
+    const std::uint64_t* weight_offsets;   // per vertex: where its blocks' weights start
+    const float* bias;                     // per vertex, d floats
+    const std::uint16_t* weights;          // per block, m_j × d binary16
+    const float* scales;                   // per block
+};
+
 // The pose model's lobe parameters of vertices [begin, end) (pose_model.hpp's
 // synthesize_range): per vertex v, bias[v] (d floats) plus, for each stored
-// joint block e in [offsets[v], offsets[v + 1]), the joint's fpj features
-// times scales[e] times the block's fpj × d binary16 weights
-// (weight_blocks.hpp). Written from params_out[0] on. On
+// joint block e, the joint's first c_e features times scales[e] times the
+// block's c_e × d binary16 weights (weight_blocks.hpp). Written from params_out[0]
+// on. On
 // targets with FMA the multiply-adds are fused (the result differs from the
 // others by float rounding). stride 0: d floats per vertex from
 // params_out[0]; otherwise d rows `stride` floats apart, vertex v in column
 // v − begin (sh::PoseBlock's layout).
-void synthesize_range(int d, int fpj, const std::uint32_t* offsets, const std::uint16_t* joint_index,
-                      const float* bias, const std::uint16_t* weights, const float* scales, const float* features,
-                      std::size_t begin, std::size_t end, float* params_out, std::size_t stride = 0);
+void synthesize_range(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
+                      float* params_out, std::size_t stride = 0);
 
 }  // namespace penumbra::visibility::detail

@@ -62,8 +62,14 @@ PoseModel small_model(PoseFeatures features) {
     m.joint_index = {0, 0, 1};
     const std::size_t d = std::size_t(m.params_per_vertex()), f = std::size_t(features_per_joint(features));
     for (std::size_t i = 0; i < m.vertex_count * d; ++i) m.bias.push_back(0.1f * float(i % 7));
+    use_raw_joint_features(m);
+    // As a fit stores them: the hand moves along 2 directions (its first two
+    // raw entries), and the blocks keep 2, all and 1 of their joint's.
+    m.feature_offsets[2] = m.feature_offsets[1] + 2;
+    m.feature_basis.resize(m.feature_offsets[2] * f);
+    m.block_directions = {2, std::uint8_t(f), 1};
     std::vector<float> weights;
-    for (std::size_t i = 0; i < m.joint_index.size() * f * d; ++i) weights.push_back(0.01f * float(i % 5) - 0.02f);
+    for (std::size_t i = 0; i < (3 + f) * d; ++i) weights.push_back(0.01f * float(i % 5) - 0.02f);
     set_weights(m, weights);
     m.summary = {{"frames", 3.0}, {"zh_fit_rms", 0.01}};
     return m;

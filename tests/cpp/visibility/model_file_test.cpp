@@ -1,12 +1,17 @@
 // The baker's files (visibility/model_file.hpp): exact round trips, every
 // truncation and corruption an IoError, atomic writes.
+#include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <fstream>
 #include <random>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "common/binary_io.hpp"
 #include "common/error.hpp"
+#include "common/hash.hpp"
 #include "test_files.hpp"
 #include "visibility/model_file.hpp"
 #include "visibility/pose_model.hpp"
@@ -23,6 +28,56 @@ PoseModel small_model() {
     return fit_pose_model(synthetic_set(angles, 30, 1), {{true, false}, {true, false}}, FitSettings{});
 }
 
+// A model file from before binary16 blocks and joint feature directions
+// (format version 1: float32 weights of every raw joint feature), written
+// byte by byte as that version did.
+TEST(ModelFile, a_version_1_model_loads_with_its_weights_rounded_to_blocks) {
+    penumbra::testing::ScratchDir dir;
+    const std::vector<std::uint32_t> offsets{0, 1, 1, 3};
+    const std::vector<std::uint16_t> joints{0, 0, 1};
+    std::vector<float> bias, weights;
+    for (int i = 0; i < 3 * 6; ++i) bias.push_back(0.1f * float(i % 7));
+    for (int i = 0; i < 3 * 9 * 6; ++i) weights.push_back(0.01f * float(i % 5) - 0.02f + 1e-5f * float(i));
+    BinaryWriter w;
+    for (std::uint32_t x : {4u /* order */, 1u /* lobes */, 16u, 0u, 0u /* R − I */}) w.put(x);
+    w.put(std::uint64_t(3));
+    w.put(std::uint64_t(0x1234));
+    w.put_strings({"root", "arm", "hand"});
+    w.put_strings({"arm", "hand"});
+    w.put(std::uint32_t(0));
+    w.put_array(offsets);
+    w.put(std::uint64_t(joints.size()));
+    w.put_array(joints);
+    w.put_array(bias);
+    w.put_array(weights);
+    const std::string payload = w.bytes();
+    std::string header(32, '\0');
+    const std::uint32_t version = 1;
+    const std::uint64_t size = payload.size(), checksum = fnv1a64(payload.data(), payload.size());
+    std::memcpy(header.data(), "PNMBRZHM", 8);
+    std::memcpy(header.data() + 8, &version, 4);
+    std::memcpy(header.data() + 16, &size, 8);
+    std::memcpy(header.data() + 24, &checksum, 8);
+    std::ofstream(dir.file("v1.pzh"), std::ios::binary) << header << payload;
+
+    const PoseModel m = read_pose_model(dir.file("v1.pzh"));
+    EXPECT_EQ(m.joint_feature_count(0), 9);
+    EXPECT_EQ(m.joint_feature_count(1), 9);
+    EXPECT_EQ(m.block_directions, (std::vector<std::uint8_t>{9, 9, 9}));
+    EXPECT_EQ(m.bias, bias);
+    const std::vector<float> back = weight_values(m);
+    ASSERT_EQ(back.size(), weights.size());
+    for (std::size_t i = 0; i < weights.size(); ++i) EXPECT_NEAR(back[i], weights[i], std::ldexp(0.05f, -11)) << i;
+    // The identity basis: the pose's features are the raw R − I entries.
+    std::vector<float> rotations(18, 0.0f);
+    for (int j = 0; j < 2; ++j) rotations[9 * j] = rotations[9 * j + 4] = rotations[9 * j + 8] = 1.0f;
+    rotations[1] = 0.25f;
+    const std::vector<float> features = pose_features(m, rotations.data());
+    ASSERT_EQ(features.size(), 18u);
+    EXPECT_EQ(features[1], 0.25f);
+    EXPECT_EQ(features[0], 0.0f);
+}
+
 TEST(ModelFile, round_trip_is_exact) {
     penumbra::testing::ScratchDir dir;
     const PoseModel model = small_model();
@@ -32,6 +87,10 @@ TEST(ModelFile, round_trip_is_exact) {
     EXPECT_EQ(back.armature_bones, model.armature_bones);
     EXPECT_EQ(back.weights, model.weights);
     EXPECT_EQ(back.weight_scales, model.weight_scales);
+    EXPECT_EQ(back.block_directions, model.block_directions);
+    EXPECT_EQ(back.feature_offsets, model.feature_offsets);
+    EXPECT_EQ(back.feature_basis, model.feature_basis);
+    EXPECT_EQ(back.weight_offsets, model.weight_offsets);
     EXPECT_EQ(back.bias, model.bias);
     EXPECT_EQ(back.joint_offsets, model.joint_offsets);
     EXPECT_EQ(back.topology_hash, model.topology_hash);

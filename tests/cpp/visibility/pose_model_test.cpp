@@ -22,9 +22,15 @@ TEST(PoseModel, linear_data_is_reproduced_on_unseen_poses) {
     const TrainingSet set = synthetic_set(angles, 50, 2);
     FitSettings s;
     s.lobes = 1;
+    // Pruning drops a joint direction whose contribution stays under the
+    // tolerance (RMS of lobe parameters): well under the 2e-3 asked here.
+    s.prune_tolerance = 1e-4;
     FitReport report;
     const PoseModel model = fit_pose_model(set, {{true, false}, {true, false}, {true, false}}, s, {}, &report);
     ASSERT_EQ(model.joints, std::vector<std::string>{"arm"});
+    // A rotation about one axis: its R − I spans two directions.
+    EXPECT_EQ(report.joints[0].feature_directions, 2);
+    EXPECT_EQ(model.joint_feature_count(0), 2);
     EXPECT_FALSE(report.joints[1].active);
     EXPECT_NE(report.joints[1].reason.find("rotates at most"), std::string::npos);
     EXPECT_EQ(report.holdout_frames, 4u);
@@ -36,6 +42,47 @@ TEST(PoseModel, linear_data_is_reproduced_on_unseen_poses) {
     EXPECT_LT(report.model_bytes, report.dense_bytes);
     const TrainingSet unseen = synthetic_set({0.05, 0.77, 1.33}, 50, 2);
     EXPECT_LT(evaluate_pose_model(model, unseen).sh_rms, 3e-3);
+}
+
+// The synthetic joint turns about one axis: two feature directions. Its
+// lobes move with the pose in proportion to the vertex index, so vertices
+// near 0 barely depend on it: pruning by measured contribution keeps the
+// leading direction alone (or none) there, both further on, and every
+// direction at tolerance 0.
+TEST(PoseModel, pruning_keeps_each_vertex_the_leading_joint_directions_that_matter) {
+    std::vector<double> angles;
+    for (int f = 0; f < 16; ++f) angles.push_back(0.1 * f);
+    const TrainingSet set = synthetic_set(angles, 50, 1);
+    const std::vector<BoneInfluence> influence{{true, false}, {true, false}};
+    FitSettings s;
+    s.lobes = 1;
+    s.constant_tolerance = 0.0;
+    FitReport report;
+    const PoseModel pruned = fit_pose_model(set, influence, s, {}, &report);
+    ASSERT_EQ(pruned.joint_feature_count(0), 2);
+    std::size_t one = 0, two = 0;
+    for (std::uint8_t c : pruned.block_directions) (c == 1 ? one : two) += 1;
+    EXPECT_GT(one, 0u);
+    EXPECT_GT(two, 0u);
+    EXPECT_EQ(report.stored_directions, one + 2 * two);
+    EXPECT_LT(pruned.weights.size(), pruned.joint_index.size() * 2 * std::size_t(pruned.params_per_vertex()));
+    // The blocks that keep both directions are the vertices that move most.
+    std::size_t first_two = pruned.vertex_count;
+    for (std::size_t v = 0; v < pruned.vertex_count && first_two == pruned.vertex_count; ++v)
+        for (std::uint32_t e = pruned.joint_offsets[v]; e < pruned.joint_offsets[v + 1]; ++e)
+            if (pruned.block_directions[e] == 2) first_two = v;
+    for (std::size_t v = first_two; v < pruned.vertex_count; ++v) {
+        ASSERT_EQ(pruned.joint_offsets[v + 1] - pruned.joint_offsets[v], 1u) << v;
+        EXPECT_EQ(pruned.block_directions[pruned.joint_offsets[v]], 2) << v;
+    }
+
+    s.prune_tolerance = 0.0;
+    FitReport full_report;
+    const PoseModel full = fit_pose_model(set, influence, s, {}, &full_report);
+    for (std::uint8_t c : full.block_directions) EXPECT_EQ(c, 2);
+    EXPECT_GT(full.weights.size(), pruned.weights.size());
+    // What pruning drops stays small next to what the pose explains.
+    EXPECT_LT(report.model_holdout.sh_rms, full_report.model_holdout.sh_rms + 0.01);
 }
 
 TEST(PoseModel, held_out_error_is_that_of_the_pruned_model_as_stored) {

@@ -155,6 +155,7 @@ PoseModel random_model(std::size_t vertices, int joints, std::mt19937_64& rng) {
     for (std::size_t i = 0; i < m.bias.size(); ++i) m.bias[i] = (i % 6 < 2 ? 0.8f : 1.5f) * uniform(rng);
     std::vector<float> weights(m.joint_index.size() * 9 * d);
     for (float& w : weights) w = 0.2f * uniform(rng);
+    use_raw_joint_features(m);
     set_weights(m, weights);
     return m;
 }

@@ -125,6 +125,7 @@ TEST(WeightBlocks, every_simd_target_synthesizes_the_stored_weights) {
             const std::vector<float> block = random_block(std::size_t(fpj) * d, float(std::pow(10.0, double(e % 7) - 3.0)), rng);
             weights.insert(weights.end(), block.begin(), block.end());
         }
+        use_raw_joint_features(m);
         set_weights(m, weights);
         check_pose_model(m);
         const std::vector<float> stored = weight_values(m);

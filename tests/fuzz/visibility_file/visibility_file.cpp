@@ -48,6 +48,8 @@ void check_model(const PoseModel& m, const std::string& path) {
                             r.armature_bones == m.armature_bones && r.joints == m.joints &&
                             r.joint_offsets == m.joint_offsets && r.joint_index == m.joint_index &&
                             same_bits(r.bias, m.bias) && r.weights == m.weights && same_bits(r.weight_scales, m.weight_scales) &&
+                            r.block_directions == m.block_directions && r.feature_offsets == m.feature_offsets &&
+                            same_bits(r.feature_basis, m.feature_basis) &&
                             r.summary.size() == m.summary.size(),
                         "a pose model written back does not read back the same");
 }
