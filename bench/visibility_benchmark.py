@@ -24,10 +24,11 @@ sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
 
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
-from penumbra.visibility import bake, runtime, scene_data  # noqa: E402
+from penumbra.visibility import bake, scene_data  # noqa: E402
 import visibility_character  # noqa: E402
 from svg_plot import svg_plot  # noqa: E402
 from cycles_ao_bake import cycles_ao  # noqa: E402  (bench/, this script's folder)
+import visibility_runtime  # noqa: E402  (bench/ too)
 
 QUICK = "--quick" in sys.argv
 RUNTIME_ONLY = "--runtime" in sys.argv  # only the run-time section (docs rewritten in place)
@@ -114,131 +115,30 @@ def truth_sh(unseen):
     return np.stack([unseen.visibility(i).astype(np.float64) for i in range(len(unseen))])
 
 
-def _median_and_spread(values):
-    """Median and half the interquartile range (the ± beside each time)."""
-    q1, median, q3 = np.percentile(values, [25, 50, 75])
-    return float(median), float((q3 - q1) / 2)
-
-
 def runtime_costs(detail, repeats=15):
     """One frame change of the character with Penumbra (2 lobes, order 4,
     Phong) against Blender's own frame change without it, alternated frame by
-    frame in the same run; then, on one pose, the dispatched SIMD kernel
-    against the one-lane scalar reference and the fused run time (its own
-    normals) against the separate passes with Blender's normals."""
-    core = native.require()
+    frame in the same run (bench/visibility_runtime.py); the model is baked
+    from 4 frames at 16 rays: the run time's cost does not depend on how well
+    the model was baked."""
     obj, rig = new_character(detail, frames=8)
     world = bpy.data.worlds.new("w")
     world.use_nodes = True
     bpy.context.scene.world = world
     path = os.path.join(bpy.app.tempdir or "/tmp", f"bench_runtime_{detail}.pzh")
     bpy.ops.penumbra.bake_visibility(frame_start=1, frame_end=8, frame_step=2, rays=16, lobes=2, filepath=path)
-    settings = obj.penumbra_visibility
-    settings.brdf = "PHONG"
-    scene = bpy.context.scene
-    rows, plain = [], []
-    for k in range(repeats):
-        settings.enabled = True    # shades at once (outside the timing)
-        started = time.perf_counter()
-        scene.frame_set(1 + (2 * k) % 8)
-        total = time.perf_counter() - started
-        rows.append(dict(runtime.last_timings, frame_change=total))
-        settings.enabled = False
-        started = time.perf_counter()
-        scene.frame_set(1 + (2 * k + 1) % 8)
-        plain.append(time.perf_counter() - started)
-    result = {key: float(np.median([r[key] for r in rows])) for key in rows[0]}
-    result["frame_change"], result["frame_change_spread"] = _median_and_spread([r["frame_change"] for r in rows])
-    result["frame_change_without_penumbra"], result["frame_change_without_penumbra_spread"] = \
-        _median_and_spread(plain)
-    # What the frame change spends outside the handler beyond Blender's own
-    # frame change: mostly Blender evaluating the mesh's modifiers again for
-    # the attributes the handler wrote.
-    result["after_handler"] = float(np.median([r["frame_change"] - r["total"] for r in rows])) - \
-        result["frame_change_without_penumbra"]
-    result["ratio"] = result["frame_change"] / result["frame_change_without_penumbra"]
-    result["vertices"] = len(obj.data.vertices)
-    result["repeats"] = repeats
-    result["load_average"] = os.getloadavg()[0]  # the machine may be shared: say how busy it was
-    settings.enabled = True
-    result["simd_target"] = core.sh.simd_target()
-    result.update(runtime_accuracy(core, obj, scene))
-    settings.enabled = False
-    log(f"run time at {result['vertices']} vertices ({result['simd_target']}): frame change "
-        f"{1e3 * result['frame_change']:.2f} ± {1e3 * result['frame_change_spread']:.2f} ms, without Penumbra "
-        f"{1e3 * result['frame_change_without_penumbra']:.2f} ± {1e3 * result['frame_change_without_penumbra_spread']:.2f}"
-        f" ms, ratio {result['ratio']:.2f} (goal <= 4.5 at 100k); gather {1e3 * result['gather']:.2f} "
-        f"(mesh {1e3 * result['read_mesh']:.2f}), normals {1e3 * result['normals']:.2f}, pose -> lobes "
-        f"{1e3 * result['pose_to_lobes']:.2f}, frames {1e3 * result['frames']:.2f}, shading "
-        f"{1e3 * result['shading']:.2f}, write {1e3 * result['write_attributes']:.2f}, after the handler "
-        f"{1e3 * result['after_handler']:.2f} ms; {result['simd_target']} vs {result['reference_target']}: "
-        f"max |Δrgb| {result['max_abs_difference_rgb']:.2e} (of max {result['max_rgb']:.2f}), "
-        f"max |Δao| {result['max_abs_difference_ao']:.2e}; own vs Blender's normals: max |Δrgb| "
-        f"{result['normals_difference_rgb']:.2e}, max |Δao| {result['normals_difference_ao']:.2e}")
+    result = visibility_runtime.frame_change_costs(obj, list(range(1, 9)), repeats)
+    log(visibility_runtime.summary(result))
     return result
-
-
-def runtime_accuracy(core, obj, scene):
-    """On the current pose: the dispatched SIMD kernel against the one-lane
-    scalar reference, and the fused run time (normals by Blender's rule,
-    computed in C++) against the separate passes fed Blender's own normals."""
-    out = {}
-    rgb, ao, _ = runtime.shade_object(obj, scene)
-    rgb, ao = rgb.copy(), ao.copy()
-    core.sh.force_simd_target(core.sh.simd_targets()[-1])
-    try:
-        out["reference_target"] = core.sh.simd_target()
-        rgb_ref, ao_ref, _ = runtime.shade_object(obj, scene)
-    finally:
-        core.sh.force_simd_target("")
-    out["max_abs_difference_rgb"] = float(np.abs(rgb - rgb_ref).max())
-    out["max_abs_difference_ao"] = float(np.abs(ao - ao_ref).max())
-    out["max_rgb"] = float(np.abs(rgb_ref).max())
-    entry = runtime.loaded_model(obj)
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-    frame = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False)   # Blender's normals
-    s = obj.penumbra_visibility
-    lighting, _, _ = scene_data.world_lighting_checked(scene, entry.model.order)
-    camera = np.array(scene.camera.matrix_world.translation) if scene.camera else np.zeros(3)
-    rgb_blender, ao_blender, _ = entry.model.shade(
-        scene_data.bone_rotations(scene_data.armature_of(obj), entry.model.joints), frame.positions, frame.normals,
-        frame.triangles, entry.neighbours, lighting, model=s.brdf.lower(), phong_exponent=s.phong_exponent,
-        camera=camera, transmission=np.array(s.transmission[:]))
-    out["normals_difference_rgb"] = float(np.abs(np.maximum(rgb_blender, 0.0) - rgb).max())
-    out["normals_difference_ao"] = float(np.abs(np.clip(ao_blender, 0.0, 1.0) - ao).max())
-    return out
 
 
 def runtime_section(runtime_results):
     """The "Run time per frame" section of docs/visibility-benchmark.md."""
     lines = ["## Run time per frame (handler, median)", "",
-             "A frame change (`scene.frame_set`) of the character with the run time enabled (2 lobes, order 4, "
-             "Phong), alternated frame by frame in the same run with Blender's own frame change of the same "
-             "scene without Penumbra; times are medians, ± half the interquartile range. `gather` is everything "
-             "the handler reads from Blender (model lookup, bone rotations, the evaluated mesh's positions and "
-             "world matrix, World, camera); `of which the mesh` is the positions. The rest of the handler is one "
-             "C++ call on two threads: Blender's vertex normals computed from the posed positions (its own rule, "
-             "so Blender is never asked for them, which would make it compute them), then one fused pass over "
-             "blocks of vertices (normal, frame, pose → lobes, shading, clamped write; the kernels on the SIMD "
-             "target Highway dispatched for this CPU, shading in float); the fused pass's wall time is split "
-             "between `normals`, `frames`, `pose → lobes` and `shading` by the thread time each took. `write "
-             "attributes` is the two point attributes and `mesh.update()`; `after the handler` is what the frame "
-             "change spends beyond the handler and Blender's own frame change: mostly Blender evaluating the "
-             "mesh's modifiers again for the attributes just written, which every Blender does (4.x and 5.x tag "
-             "the mesh on the attribute writes themselves). Run alone: `.venv/bin/python "
-             "bench/visibility_benchmark.py --runtime`.", "",
-             "| vertices | SIMD target | gather ms | of which the mesh ms | normals ms | pose → lobes ms | frames ms | "
-             "shading ms | write attributes ms | after the handler ms | whole frame change ms | without Penumbra ms "
-             "| ratio (goal ≤ 4.5 at 100k) |",
-             "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
-    for x in runtime_results.values():
-        lines.append(
-            f"| {x['vertices']} | {x['simd_target']} | {1e3 * x['gather']:.2f} | {1e3 * x['read_mesh']:.2f} | "
-            f"{1e3 * x['normals']:.2f} | {1e3 * x['pose_to_lobes']:.2f} | {1e3 * x['frames']:.2f} | "
-            f"{1e3 * x['shading']:.2f} | {1e3 * x['write_attributes']:.2f} | {1e3 * x['after_handler']:.2f} | "
-            f"{1e3 * x['frame_change']:.2f} ± {1e3 * x['frame_change_spread']:.2f} | "
-            f"{1e3 * x['frame_change_without_penumbra']:.2f} ± {1e3 * x['frame_change_without_penumbra_spread']:.2f} | "
-            f"**{x['ratio']:.2f}** |")
+             visibility_runtime.DESCRIPTION + " The realistic character's frame change at ~100k vertices is in "
+             "[visibility-humanoid-benchmark.md](visibility-humanoid-benchmark.md). Run alone: `.venv/bin/python "
+             "bench/visibility_benchmark.py --runtime`.", ""]
+    lines += visibility_runtime.table(runtime_results.values())
     big = max(runtime_results.values(), key=lambda x: x["vertices"])
     lines += ["", f"Goal (issue #13): the whole frame change at ~100k vertices at most 4.5× Blender's own. Measured: "
               f"**{big['ratio']:.2f}×** at {big['vertices']} vertices — "
@@ -255,32 +155,8 @@ def runtime_section(runtime_results):
                       f"{name} {ns:.0f} ns/vertex" + (f" ({scalar / ns:.1f}× the scalar one)" if scalar else "")
                       for name, ns in kernel.items())
                   + ". SSE4 is what the default x86-64-v2 build ran before the run-time dispatch."]
-    lines += ["", "Accuracy on the same pose. The dispatched kernel against the same kernel compiled as the one-lane "
-              "scalar reference (both in float; they differ by rounding where the SIMD targets fuse multiply-adds): "
-              + "; ".join(f"{x['vertices']} vertices, {x['simd_target']} vs {x['reference_target']}: max |Δrgb| "
-                          f"{x['max_abs_difference_rgb']:.1e} (largest rgb {x['max_rgb']:.2f}), max |Δao| "
-                          f"{x['max_abs_difference_ao']:.1e}" for x in runtime_results.values())
-              + ". The run time with its own normals against the separate passes fed Blender's normals (the same "
-              "in Blender 4.x/5.x bit for bit; the rest is the frames' float rounding): " + "; ".join(
-                  f"{x['vertices']} vertices: max |Δrgb| {x['normals_difference_rgb']:.1e}, max |Δao| "
-                  f"{x['normals_difference_ao']:.1e}" for x in runtime_results.values())
-              + ". tests/cpp/sh/pose_shading_test.cpp holds every target to 1e-10 of the straightforward reference "
-              "in double and to 3e-5 (relative) of double in float."]
+    lines += ["", visibility_runtime.accuracy_line(runtime_results.values())]
     return lines
-
-
-def kernel_per_target():
-    """ns per vertex of the shading kernel on each SIMD target (one thread,
-    100k vertices, 2 lobes, order 4, Phong), from bench/cpp/pose_shading_bench.cpp."""
-    import subprocess
-    exe = os.path.join(ROOT, "build", "bench", "penumbra_pose_shading_bench")
-    out = subprocess.run([exe, "--quick"], capture_output=True, text=True, check=True).stdout
-    per_target = {}
-    for line in out.splitlines():
-        cells = [c.strip() for c in line.strip("|").split("|")]
-        if len(cells) > 7 and cells[0].startswith("batched ") and cells[1:7] == ["100000", "2", "4", "phong", "float32", "1"]:
-            per_target[cells[0].split()[1]] = float(cells[7])  # the last row per target: the per-target loop
-    return per_target
 
 
 def run_runtime_only():
@@ -288,7 +164,7 @@ def run_runtime_only():
     penumbra.register()
     results = {"10k": runtime_costs(3.4, repeats=21), "100k": runtime_costs(11, repeats=21)}
     penumbra.unregister()
-    results["100k"]["kernel_ns_per_vertex"] = kernel_per_target()
+    results["100k"]["kernel_ns_per_vertex"] = visibility_runtime.kernel_per_target()
     path = os.path.join(DOCS, "visibility-benchmark.md")
     with open(path) as f:
         text = f.read()
@@ -522,7 +398,7 @@ def write_markdown(r):
              "|Δ ambient occlusion| (the diffuse shade under a uniform unit World). Timings share the machine "
              "with whatever else ran; compare ratios within this run.", "",
              "## Lobes and rays", "",
-             "`held-out` is the model exactly as stored (ridge, constant vertices, per-vertex joint pruning) fitted "
+             "`held-out` is the model exactly as stored (ridge, constant vertices, per-vertex pruning of joint directions) fitted "
              "without the held-out frames (every 4th training frame) and measured on them; `unpruned` is the plain "
              "ridge solution on the same frames. `unseen` is the stored model (all 24 frames) on the 12 poses never baked.", "",
              "| rays | lobes | bake s | Mrays/s end to end (C++ part) | fit s | ZH fit sh | train sh | held-out sh (unpruned) | held-out AO | unseen sh | unseen AO (max) | model MB | dense MB | constant vertices |",
