@@ -440,7 +440,9 @@ PENUMBRA_LANES_INLINE Oct load_half_oct(const std::uint16_t* p) {
 }
 PENUMBRA_LANES_INLINE Oct multiply_add(Oct a, Oct b, Oct acc) { return Oct(_mm256_fmadd_ps(__m256(a), __m256(b), __m256(acc))); }
 #else
-typedef Quad Oct;  // unused
+// Elsewhere every row goes in groups of 4; the names below are only
+// declared, for the branch Accumulator never takes there.
+typedef Quad Oct;
 constexpr bool kOctets = false;
 PENUMBRA_LANES_INLINE Oct load_half_oct(const std::uint16_t* p) { return load_half_quad(p); }
 #endif
