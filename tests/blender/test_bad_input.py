@@ -271,9 +271,9 @@ def run_modal(op, context, between=None):
     if between is not None:
         between()
     for _ in range(10000):
-        thread = getattr(op, "_thread", None)
-        if thread is not None:
-            thread.join()
+        run = getattr(op, "_modal_job", None)  # modal_job.invoke's run: join its worker
+        if run is not None and run.thread is not None:
+            run.thread.join()
         result = op.modal(context, types.SimpleNamespace(type="TIMER"))
         if result != {"RUNNING_MODAL"}:
             break

@@ -3,26 +3,26 @@ that samples a pre-filtered lookup image, and penumbra.restore_color_ramp to
 put the ramp back.
 
 Everything that can fail is checked before anything is changed (plan);
-the lookup is then built (in a worker thread when run from the UI, so Esc
-cancels and the status bar shows progress); only then are files written
+the lookup is then built (on a worker thread when run from the UI:
+modal_job.py, so Esc cancels and the header shows progress); only then are files written
 (atomically, by the core) and the node tree edited (apply)."""
 
 import math
 import os
 import tempfile
-import threading
 
 import bpy
 import numpy as np
 
 from . import node_groups, noise_model, noise_statistics, ramp as ramp_io, sample_count
-from .. import color, native, world
+from .. import color, modal_job, native, world
 from ..compat import socket_is, uses_nodes
-from ..errors import CORE_ERRORS, describe
+from ..errors import describe
 
 
-class BakeError(Exception):
-    """A problem the user can fix; its message goes to the operator report."""
+class BakeError(ValueError):
+    """A problem the user can fix; its message goes to the operator report
+    (a ValueError, like the core's bad input: errors.CORE_ERRORS)."""
 
 
 def _editable_material(context):
@@ -442,11 +442,26 @@ class _Rollback:
         self.backups = {}
 
 
-def _report_done(op, plan, result):
-    what = f"'{plan.node.name}' in '{plan.material.name}'" if plan.node is not None else f"image '{plan.image.name}'"
-    op.report({"INFO"}, f"Filtered {what}: lookup {result['path']}")
-    for warning in plan.warnings:
-        op.report({"WARNING"}, warning)
+class _LookupBake(modal_job.Job):
+    """Builds the lookup (a worker: compute has no bpy), then writes it and
+    edits the tree (apply, which puts everything back if it fails)."""
+
+    def __init__(self, plan):
+        super().__init__()
+        self.plan = plan
+
+    def status(self):
+        return "Baking the filtered colour map"
+
+    def failure(self, error):
+        return f"Nothing was changed: {describe(error)}"
+
+    def steps(self):
+        plan = self.plan
+        lut = yield modal_job.Worker(plan.compute)
+        result = plan.apply(lut)
+        what = f"'{plan.node.name}' in '{plan.material.name}'" if plan.node is not None else f"image '{plan.image.name}'"
+        return [("INFO", f"Filtered {what}: lookup {result['path']}")] + [("WARNING", w) for w in plan.warnings]
 
 
 class PENUMBRA_OT_bake_colormap_lut(bpy.types.Operator):
@@ -460,81 +475,20 @@ class PENUMBRA_OT_bake_colormap_lut(bpy.types.Operator):
         name="Image", default="",
         description="Bake the colour map held in this image's middle row instead of the active ColorRamp")
 
-    _timer = None
-    _thread = None
-
-    def _plan(self, context):
-        try:
-            return BakePlan(context, context.scene.penumbra.colormap, self.image_name)
-        except (BakeError, *CORE_ERRORS) as error:
-            self.report({"ERROR"}, describe(error))
-            return None
+    def _job(self, context):
+        return _LookupBake(BakePlan(context, context.scene.penumbra.colormap, self.image_name))
 
     def execute(self, context):
-        plan = self._plan(context)
-        if plan is None:
-            return {"CANCELLED"}
-        wm = context.window_manager
-        wm.progress_begin(0, 100)
-        try:
-            lut = plan.compute(progress=lambda f: wm.progress_update(int(100 * f)) or True)
-            result = plan.apply(lut)
-        except (BakeError, *CORE_ERRORS) as error:
-            self.report({"ERROR"}, f"Nothing was changed: {describe(error)}")
-            return {"CANCELLED"}
-        finally:
-            wm.progress_end()
-        _report_done(self, plan, result)
-        return {"FINISHED"}
+        return modal_job.execute(self, context, lambda: self._job(context))
 
     def invoke(self, context, event):
-        plan = self._plan(context)
-        if plan is None:
-            return {"CANCELLED"}
-        self._state = {"plan": plan, "fraction": 0.0, "cancel": False, "lut": None, "error": None}
-        state = self._state
-
-        def progress(fraction):
-            state["fraction"] = fraction
-            return not state["cancel"]
-
-        def work():
-            try:
-                state["lut"] = plan.compute(progress=progress)
-            except Exception as error:  # reported in modal(), on Blender's thread
-                state["error"] = error
-
-        self._thread = threading.Thread(target=work, daemon=True)
-        self._thread.start()
-        wm = context.window_manager
-        wm.progress_begin(0, 100)
-        self._timer = wm.event_timer_add(0.1, window=context.window)
-        wm.modal_handler_add(self)
-        return {"RUNNING_MODAL"}
+        return modal_job.invoke(self, context, lambda: self._job(context))
 
     def modal(self, context, event):
-        state = self._state
-        wm = context.window_manager
-        if event.type == "ESC":
-            state["cancel"] = True
-        if event.type != "TIMER":
-            return {"RUNNING_MODAL"} if not state["cancel"] else {"PASS_THROUGH"}
-        wm.progress_update(int(100 * state["fraction"]))
-        if self._thread.is_alive():
-            return {"RUNNING_MODAL"}
-        wm.event_timer_remove(self._timer)
-        wm.progress_end()
-        if state["cancel"] or state["error"] is not None:
-            message = "Cancelled" if state["cancel"] else f"Failed: {state['error']}"
-            self.report({"WARNING"} if state["cancel"] else {"ERROR"}, f"{message}; nothing was changed")
-            return {"CANCELLED"}
-        try:
-            result = state["plan"].apply(state["lut"])
-        except (BakeError, *CORE_ERRORS) as error:
-            self.report({"ERROR"}, f"Nothing was changed: {describe(error)}")
-            return {"CANCELLED"}
-        _report_done(self, state["plan"], result)
-        return {"FINISHED"}
+        return modal_job.modal(self, context, event)
+
+    def cancel(self, context):
+        modal_job.cancel(self, context)
 
 
 class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):

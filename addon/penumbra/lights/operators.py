@@ -2,7 +2,7 @@
 
 The work is split into steps (open, one step per frame, finish) so the same
 job runs synchronously from a script (execute) and as a modal operator with
-a timer from the UI (invoke: status-bar progress, Esc cancels). Nothing in
+a timer from the UI (invoke: progress, Esc cancels), both by modal_job.py. Nothing in
 the .blend changes until every frame has been processed; a cancel or an
 error leaves the file as it was."""
 
@@ -14,23 +14,21 @@ import tempfile
 import bpy
 import numpy as np
 
-from .. import color, native, world
+from .. import color, modal_job, native, world
 from . import rig_objects, settings
 from ..core_settings import limits
-from ..errors import CORE_ERRORS, describe
 
 PREVIEW_NAME = "Penumbra Light Rig Preview"
 _SETTING_NAMES = ("filepath", "mapping", "colorspace", "count", "sampler", "power", "blue_noise", "fit_irradiance",
                   "tracking", "temporal_filter", "filter_brightness", "cluster_max", "adaptive_tolerance", "frame_start", "frame_end",
                   "limit_shadows", "json_path")
-# The builds running modally from the UI: the header text shows each one's
-# frames, and so can a script or a test between two timer ticks.
-_running_jobs = []
 
 
 def running_builds():
-    """(frames done, frames in all) of each light rig being built from the UI."""
-    return [(job.done, job.frames) for job in _running_jobs]
+    """(frames done, frames in all) of each light rig being built from the UI
+    (the header shows them; so can a script or a test between two timer ticks)."""
+    return [(build.rig.done, build.rig.frames) for build in modal_job.running() if isinstance(build, _RigBuild)]
+
 
 # The widest grid the World's light is summed on when it is more than one
 # rotated image: the core's working map is no wider (MapOptions::max_width's
@@ -286,82 +284,45 @@ class PENUMBRA_OT_build_light_rig(bpy.types.Operator):
             if not self.properties.is_property_set(name):
                 setattr(self, name, getattr(s, name))
 
-    def _start(self, context):
+    def _job(self, context):
+        self._take_scene_defaults(context)
         # The count's lower bound is the property's (the core's range).
         if self.frame_end < self.frame_start:
             raise ValueError(f"frame_end ({self.frame_end}) is before frame_start ({self.frame_start})")
-        return _Job(self, context)
+        return _RigBuild(_Job(self, context))
 
     def execute(self, context):
-        self._take_scene_defaults(context)
-        wm = context.window_manager
-        try:
-            job = self._start(context)
-            wm.progress_begin(0, job.frames)
-            try:
-                while not job.step():
-                    wm.progress_update(job.done)
-            finally:
-                wm.progress_end()
-            msg, bad = job.apply()
-        except CORE_ERRORS as error:
-            self.report({"ERROR"}, describe(error))
-            return {"CANCELLED"}
-        self.report({"WARNING"} if bad else {"INFO"}, msg)
-        return {"FINISHED"}
+        return modal_job.execute(self, context, lambda: self._job(context))
 
     def invoke(self, context, event):
-        self._take_scene_defaults(context)
-        try:
-            self._job = self._start(context)
-        except CORE_ERRORS as error:
-            self.report({"ERROR"}, describe(error))
-            return {"CANCELLED"}
-        wm = context.window_manager
-        wm.progress_begin(0, self._job.frames)
-        self._timer = wm.event_timer_add(0.01, window=context.window)
-        wm.modal_handler_add(self)
-        _running_jobs.append(self._job)
-        return {"RUNNING_MODAL"}
-
-    def _stop(self, context):
-        wm = context.window_manager
-        wm.event_timer_remove(self._timer)
-        wm.progress_end()
-        if self._job in _running_jobs:
-            _running_jobs.remove(self._job)
-        if context.area:
-            context.area.header_text_set(None)
-
-    def cancel(self, context):
-        # Blender ends a modal operator this way when the file is closed or
-        # another one loaded: nothing was written yet, only the timer and
-        # the progress display are left to remove.
-        self._stop(context)
+        return modal_job.invoke(self, context, lambda: self._job(context))
 
     def modal(self, context, event):
-        if event.type == "ESC":
-            self._stop(context)
-            self.report({"WARNING"}, "Light rig cancelled; nothing was changed")
-            return {"CANCELLED"}
-        if event.type != "TIMER":
-            return {"PASS_THROUGH"}
-        job = self._job
-        try:
-            finished = job.step()
-            context.window_manager.progress_update(job.done)
-            if context.area:
-                context.area.header_text_set(f"Light rig: frame {job.done}/{job.frames} (Esc to cancel)")
-            if not finished:
-                return {"RUNNING_MODAL"}
-            self._stop(context)
-            msg, bad = job.apply()
-        except CORE_ERRORS as error:
-            self._stop(context)
-            self.report({"ERROR"}, describe(error))
-            return {"CANCELLED"}
-        self.report({"WARNING"} if bad else {"INFO"}, msg)
-        return {"FINISHED"}
+        return modal_job.modal(self, context, event)
+
+    def cancel(self, context):
+        modal_job.cancel(self, context)
+
+
+class _RigBuild(modal_job.Job):
+    """One frame a step on the main thread (the source is read through bpy's
+    colour management), then the rig is written."""
+
+    cancelled_message = "Light rig cancelled; nothing was changed"
+
+    def __init__(self, rig):
+        super().__init__()
+        self.rig = rig
+
+    def status(self):
+        return f"Light rig: frame {self.rig.done}/{self.rig.frames}"
+
+    def steps(self):
+        rig = self.rig
+        while not rig.step():
+            yield rig.done / rig.frames
+        msg, bad = rig.apply()
+        return [("WARNING" if bad else "INFO", msg)]
 
 
 classes = (PENUMBRA_OT_build_light_rig,)

@@ -161,7 +161,13 @@ def bake_frames(job, progress=None, after_frame=None, overlap=False):
     cores (docs/visibility-benchmark.md) the overlap is *slower*: Blender's
     depsgraph threads, busy posing the next frame, take the cores from the
     casting threads, which costs more than the reading it hides. Errors of
-    either side are raised here, after the worker has stopped."""
+    either side are raised here, after the worker has stopped.
+
+    The overlap's worker is the one thread the add-on starts outside
+    modal_job.py: it runs inside this synchronous call, which waits for it
+    before returning or raising, so no operator or timer ever sees it. It
+    is kept, unused by the operators, so that the measurement above can be
+    repeated (test_visibility.py checks it bakes the same frames)."""
     if not overlap:
         n = len(job.frames)
         for k, entry in enumerate(job.frames):
