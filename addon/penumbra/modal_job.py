@@ -2,8 +2,8 @@
 with the same progress, cancel, undo step and exception policy in both.
 
 The colour-map bake, the visibility bake and the light-rig build each hand
-this module a Job; their operators' execute, invoke, modal and cancel are
-one line each, calling the functions of the same names here.
+this module a Job; their operators take execute, invoke, modal and cancel
+from JobOperator, which calls the functions of the same names here.
 
 - Progress: the job's `fraction` (0..1), on Blender's progress cursor on one
   scale (PROGRESS_SCALE); from the UI also the job's status() in the header
@@ -90,6 +90,24 @@ class Job:
 
     def cancel(self):
         self.cancelled = True
+
+
+class JobOperator:
+    """A mix-in for an operator run by this module: the operator gives
+    make_job(context), which checks its input and returns the Job (an
+    exception there is reported and nothing runs)."""
+
+    def execute(self, context):
+        return execute(self, context, lambda: self.make_job(context))
+
+    def invoke(self, context, event):
+        return invoke(self, context, lambda: self.make_job(context))
+
+    def modal(self, context, event):
+        return modal(self, context, event)
+
+    def cancel(self, context):
+        cancel(self, context)
 
 
 def running():

@@ -56,29 +56,27 @@ class ProbeJob(modal_job.Job):
         return self.work(progress)
 
 
-class PENUMBRA_OT_modal_job_probe(bpy.types.Operator):
-    """Runs SETUP['job']() through modal_job (tests only)"""
+class PENUMBRA_OT_modal_job_probe(modal_job.JobOperator, bpy.types.Operator):
+    """Runs SETUP['job']() through modal_job, as the add-on's operators do (tests only)"""
     bl_idname = "penumbra_test.modal_job_probe"
     bl_label = "Modal Job Probe"
     bl_options = {"REGISTER", "UNDO"}
 
     modal_raised = []   # (exception, thread id) that modal() raised
 
-    def execute(self, context):
-        return modal_job.execute(self, context, SETUP["job"], progress=SETUP["progress"])
+    def make_job(self, context):
+        return SETUP["job"]()
 
-    def invoke(self, context, event):
-        return modal_job.invoke(self, context, SETUP["job"])
+    def execute(self, context):
+        # As JobOperator's, with the test's progress listener.
+        return modal_job.execute(self, context, lambda: self.make_job(context), progress=SETUP["progress"])
 
     def modal(self, context, event):
         try:
-            return modal_job.modal(self, context, event)
+            return super().modal(context, event)
         except BaseException as error:
             type(self).modal_raised.append((error, threading.get_ident()))
             raise
-
-    def cancel(self, context):
-        modal_job.cancel(self, context)
 
 
 def register():

@@ -249,7 +249,9 @@ class _Properties:
 def stand_in(cls, **given):
     """An object running `cls`'s own methods, with its properties at their
     defaults or `given`, recording its reports."""
-    methods = {k: v for k, v in vars(cls).items() if isinstance(v, types.FunctionType)}
+    mixed_in = [klass for klass in reversed(cls.__mro__) if not issubclass(bpy.types.Operator, klass)]
+    methods = {k: v for klass in mixed_in for k, v in vars(klass).items()  # with modal_job.JobOperator's
+               if isinstance(v, types.FunctionType)}
 
     def report(self, kinds, message):
         self.reports.append((set(kinds), message))

@@ -8,6 +8,7 @@ step that takes its result back. The light-rig build's modal path (frames,
 Esc, a file loaded meanwhile) is tested in lights/test_light_rig_window.py;
 the synchronous path of the same helper in test_modal_job.py."""
 
+import os
 import threading
 import time
 
@@ -123,7 +124,7 @@ def test_the_timer_moves_a_job_through_its_steps_and_its_worker(probe_op):
     assert job.worker_threads and job.worker_threads[0] != on_main(threading.get_ident)
     assert on_main(lambda: bpy.data.objects[probe.RESULT]["value"]) == 7
     assert on_main(probe.state)[0] == before[0] and job.failures == []
-    let_the_loop_turn(5)  # the timer went with the job
+    let_the_loop_turn(2)  # the timer went with the job
     assert on_main(_running) == []
 
 
@@ -162,7 +163,7 @@ def test_a_keyboard_interrupt_ends_the_job_and_is_raised_on_the_main_thread(prob
     raised = probe.PENUMBRA_OT_modal_job_probe.modal_raised
     assert [(type(e), thread) for e, thread in raised] == [(KeyboardInterrupt, on_main(threading.get_ident))]
     assert on_main(probe.state) == before and job.failures == []  # raised, not reported
-    let_the_loop_turn(5)  # no timer left to tick into the ended job
+    let_the_loop_turn(2)  # no timer left to tick into the ended job
     assert len(raised) == 1
 
 
@@ -240,3 +241,70 @@ def test_one_undo_takes_a_modal_colour_map_bake_back(ramp_scene):
     # Exactly the bake's step: the marker, pushed just before, is still there.
     assert on_main(lambda: _ramp_state(ramp_scene)) == before
     on_main(lambda: bpy.data.objects.remove(bpy.data.objects["Modal undo marker"]))
+
+
+# A real operator with worker phases between main-thread steps: the visibility bake --------
+
+VISIBILITY_FRAMES = 10
+
+
+@pytest.fixture
+def character_scene(addon, tmp_path):
+    """The small character, active, and where its model goes."""
+    from visibility_scenes import character
+
+    def build():
+        obj, rig = character(bpy.context.scene, frames=VISIBILITY_FRAMES)
+        bpy.context.window_manager.windows[0].view_layer.objects.active = obj
+        return obj.name, rig.name
+
+    names = on_main(build)
+    yield names, str(tmp_path / "model.pzh")
+
+    def remove():
+        for name in names:
+            bpy.data.objects.remove(bpy.data.objects[name])
+    on_main(remove)
+
+
+def _bake_visibility(path):
+    return _in_3d_view(lambda: bpy.ops.penumbra.bake_visibility(
+        "INVOKE_DEFAULT", frame_start=1, frame_end=VISIBILITY_FRAMES, frame_step=1, rays=16, lobes=1,
+        filepath=path))
+
+
+def _visibility_state(name):
+    obj = bpy.data.objects[name]
+    return bpy.context.scene.frame_current, obj.penumbra_visibility.model_path, obj.penumbra_visibility.report
+
+
+def test_a_modal_visibility_bake_traces_frame_by_frame_then_fits_and_stores_the_model(character_scene):
+    (name, _), path = character_scene
+    before = on_main(lambda: _visibility_state(name))
+    assert on_main(lambda: _bake_visibility(path)) == {"RUNNING_MODAL"}
+    job = on_main(_running)[0]
+    traced = []
+
+    def finished():
+        if _running():
+            traced.append(job.traced)
+            return False
+        return True
+
+    wait_until(finished, timeout=120)
+    assert traced == sorted(traced) and len(set(traced)) >= 3, traced  # a frame a step, across loop turns
+    frame, model_path, report = on_main(lambda: _visibility_state(name))
+    assert frame == before[0] and model_path == path and report != before[2]
+    assert os.path.isfile(path)
+
+
+def test_esc_during_a_modal_visibility_bake_leaves_the_frame_and_the_model_as_they_were(character_scene):
+    (name, _), path = character_scene
+    before = on_main(lambda: _visibility_state(name))
+    assert on_main(lambda: _bake_visibility(path)) == {"RUNNING_MODAL"}
+    job = on_main(_running)[0]
+    wait_until(lambda: job.traced >= 2 and _press_once("ESC"), timeout=60)
+    wait_until(lambda: not _running(), timeout=60)
+    assert job.cancelled and job.traced < VISIBILITY_FRAMES and not job.fitting
+    assert on_main(lambda: _visibility_state(name)) == before
+    assert not os.path.exists(path)

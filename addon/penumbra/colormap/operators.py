@@ -3,9 +3,9 @@ that samples a pre-filtered lookup image, and penumbra.restore_color_ramp to
 put the ramp back.
 
 Everything that can fail is checked before anything is changed (plan);
-the lookup is then built (on a worker thread when run from the UI:
-modal_job.py, so Esc cancels and the header shows progress); only then are files written
-(atomically, by the core) and the node tree edited (apply)."""
+the lookup is then built (on a worker thread when run from the UI, through
+modal_job.py, so Esc cancels and the header shows progress); only then are
+files written (atomically, by the core) and the node tree edited (apply)."""
 
 import math
 import os
@@ -464,7 +464,7 @@ class _LookupBake(modal_job.Job):
         return [("INFO", f"Filtered {what}: lookup {result['path']}")] + [("WARNING", w) for w in plan.warnings]
 
 
-class PENUMBRA_OT_bake_colormap_lut(bpy.types.Operator):
+class PENUMBRA_OT_bake_colormap_lut(modal_job.JobOperator, bpy.types.Operator):
     """Replace the active ColorRamp by a node group sampling a pre-filtered lookup image
 (or bake the lookup of an image's colour map)"""
     bl_idname = "penumbra.bake_colormap_lut"
@@ -475,20 +475,8 @@ class PENUMBRA_OT_bake_colormap_lut(bpy.types.Operator):
         name="Image", default="",
         description="Bake the colour map held in this image's middle row instead of the active ColorRamp")
 
-    def _job(self, context):
+    def make_job(self, context):
         return _LookupBake(BakePlan(context, context.scene.penumbra.colormap, self.image_name))
-
-    def execute(self, context):
-        return modal_job.execute(self, context, lambda: self._job(context))
-
-    def invoke(self, context, event):
-        return modal_job.invoke(self, context, lambda: self._job(context))
-
-    def modal(self, context, event):
-        return modal_job.modal(self, context, event)
-
-    def cancel(self, context):
-        modal_job.cancel(self, context)
 
 
 class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):

@@ -2,9 +2,9 @@
 
 The work is split into steps (open, one step per frame, finish) so the same
 job runs synchronously from a script (execute) and as a modal operator with
-a timer from the UI (invoke: progress, Esc cancels), both by modal_job.py. Nothing in
-the .blend changes until every frame has been processed; a cancel or an
-error leaves the file as it was."""
+a timer from the UI (invoke: progress, Esc cancels), both through
+modal_job.py. Nothing in the .blend changes until every frame has been
+processed; a cancel or an error leaves the file as it was."""
 
 import json
 import math
@@ -254,7 +254,7 @@ class _Job:
         return path, tmp
 
 
-class PENUMBRA_OT_build_light_rig(bpy.types.Operator):
+class PENUMBRA_OT_build_light_rig(modal_job.JobOperator, bpy.types.Operator):
     """Decompose an HDR image, sequence or video into a rig of keyframed sun lights"""
     bl_idname = "penumbra.build_light_rig"
     bl_label = "Build Light Rig"
@@ -284,24 +284,12 @@ class PENUMBRA_OT_build_light_rig(bpy.types.Operator):
             if not self.properties.is_property_set(name):
                 setattr(self, name, getattr(s, name))
 
-    def _job(self, context):
+    def make_job(self, context):
         self._take_scene_defaults(context)
         # The count's lower bound is the property's (the core's range).
         if self.frame_end < self.frame_start:
             raise ValueError(f"frame_end ({self.frame_end}) is before frame_start ({self.frame_start})")
         return _RigBuild(_Job(self, context))
-
-    def execute(self, context):
-        return modal_job.execute(self, context, lambda: self._job(context))
-
-    def invoke(self, context, event):
-        return modal_job.invoke(self, context, lambda: self._job(context))
-
-    def modal(self, context, event):
-        return modal_job.modal(self, context, event)
-
-    def cancel(self, context):
-        modal_job.cancel(self, context)
 
 
 class _RigBuild(modal_job.Job):

@@ -1,7 +1,8 @@
 """The visibility tool's operators (names are a contract):
 penumbra.bake_visibility (bake.py's pipeline, run by modal_job.py: modal
-with Esc from the UI, synchronous from scripts), penumbra.apply_visibility (runtime.py's
-shading at the current frame) and penumbra.setup_material (material.py)."""
+with Esc from the UI, synchronous from scripts), penumbra.apply_visibility
+(runtime.py's shading at the current frame) and penumbra.setup_material
+(material.py)."""
 
 import os
 import time
@@ -17,7 +18,7 @@ from .runtime import shade_object
 from .scene_data import VisibilityInputError
 
 
-class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
+class PENUMBRA_OT_bake_visibility(modal_job.JobOperator, bpy.types.Operator):
     """Bake a pose-space visibility model of the active skinned mesh (Esc cancels)"""
 
     bl_idname = "penumbra.bake_visibility"
@@ -86,7 +87,7 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
             path=resolve_path(self.filepath or s.filepath, obj),
         )
 
-    def _job(self, context):
+    def make_job(self, context):
         r = self._resolved(context)
         folder = os.path.dirname(r["path"]) or "."
         if not os.path.isdir(folder):
@@ -97,18 +98,6 @@ class PENUMBRA_OT_bake_visibility(bpy.types.Operator):
                        r["sh_order"], r["occluders"], self.below_horizon,
                        context.scene.penumbra.visibility.threads, r["actions"])
         return _VisibilityBake(bake, r)
-
-    def execute(self, context):
-        return modal_job.execute(self, context, lambda: self._job(context))
-
-    def invoke(self, context, event):
-        return modal_job.invoke(self, context, lambda: self._job(context))
-
-    def modal(self, context, event):
-        return modal_job.modal(self, context, event)
-
-    def cancel(self, context):
-        modal_job.cancel(self, context)
 
 
 class _VisibilityBake(modal_job.Job):
@@ -126,9 +115,9 @@ class _VisibilityBake(modal_job.Job):
         self.fitting = False
 
     def status(self):
-        what = "Fitting the pose model" if self.fitting else \
-            f"Baking visibility: frame {self.traced}/{len(self.bake.frames)}"
-        return f"{what} ({100 * self.fraction:.0f}%)"
+        if self.fitting:
+            return "Fitting the pose model"
+        return f"Baking visibility: frame {self.traced}/{len(self.bake.frames)}"
 
     def steps(self):
         job, r = self.bake, self.settings
