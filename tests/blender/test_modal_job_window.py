@@ -19,7 +19,7 @@ from blender_window import let_the_loop_turn, on_main, wait_until
 
 import modal_job_probe as probe
 
-WORKER_SECONDS = 1.0  # long enough for several timer ticks and an Esc
+WORKER_SECONDS = 1.0  # a worker that fails runs this long first: several timer ticks
 
 
 @pytest.fixture(scope="module")
@@ -71,7 +71,7 @@ def _press_once(event_type):
 
 def _slow(progress, until_cancelled=False):
     """A worker of about WORKER_SECONDS (or until cancelled), stopping as the core does."""
-    end = time.monotonic() + (30.0 if until_cancelled else WORKER_SECONDS)
+    end = time.monotonic() + (120.0 if until_cancelled else WORKER_SECONDS)
     while time.monotonic() < end:
         fraction = min(1.0, 1.0 - (end - time.monotonic()) / WORKER_SECONDS)
         if not progress(0.0 if until_cancelled else fraction):
@@ -135,8 +135,8 @@ def test_esc_or_a_right_click_cancels_a_job_and_leaves_the_data_as_it_was(probe_
     wait_until(lambda: job.worker_threads, timeout=30)  # the worker is running
     started = time.monotonic()
     on_main(lambda: _press_once(key))
-    wait_until(lambda: not _running(), timeout=30)
-    assert time.monotonic() - started < 10  # the worker stopped: it would run 30 s
+    wait_until(lambda: not _running(), timeout=90)
+    assert time.monotonic() - started < 60  # the worker stopped: it would run 120 s
     assert on_main(probe.state) == before and job.failures == []  # a cancel, not a failure
 
 
