@@ -16,33 +16,25 @@ fit uses 6 other normals per light, 642 to 2562). Time: the whole
 It replaces the "Irradiance fit" section of docs/lights-benchmark.md and
 writes docs/lights/irradiance_fit.svg."""
 
-import math
 import os
 import sys
 import time
 
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-sys.path.insert(0, os.path.join(ROOT, "bench"))
-import lights_make_test_videos as data  # noqa: E402
-from lights_median_cut import median_cut_suns  # noqa: E402
-import svg_plot  # noqa: E402
-from bench_doc import write_section  # noqa: E402
-import _penumbra  # noqa: E402  (lights_make_test_videos put it on sys.path)
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
+from bench.helpers import svg_plot, test_videos as data  # noqa: E402
+from bench.helpers.doc_section import write_section  # noqa: E402
+from bench.helpers.median_cut import median_cut_suns  # noqa: E402
+from bench.helpers.metrics import rel_rmse  # noqa: E402
+from bench.helpers.paths import ROOT, compiled_core  # noqa: E402
 
-Y = np.array([0.2126, 0.7152, 0.0722])
+_penumbra = compiled_core()
+
 COUNTS = (4, 16, 64, 256)
 MODELS = {"3.4": "BLENDER3_DISC", "4.5 / 5.x": "BLENDER4_CONE"}
 GOAL = {4: 1.0, 16: 0.5, 64: 0.5, 256: 0.5}
 SECTION = "## Irradiance fit (issue #14 goal 1)"
-
-
-def rel_rmse(e, ref):
-    d = (e - ref) @ Y
-    r = ref @ Y
-    return math.sqrt((d @ d) / (r @ r))
 
 
 def measure(maps, normals):

@@ -2,7 +2,7 @@
 """Issue #14 goal 2: light rigs steady on video (not a test; `make bench`).
 
 Sequences, made in memory from Blender's bundled HDRIs
-(scripts/lights_make_test_videos.py) at WIDTH x WIDTH/2: rotations about +Z
+(bench/helpers/test_videos.py) at WIDTH x WIDTH/2: rotations about +Z
 of 0.5, 1 and 2 degrees per frame, a cross-fade between two HDRIs over 40
 frames, and +-2 % exposure noise per frame (each frame's map times a factor
 drawn uniformly in [0.98, 1.02]). Each is turned into a rig with
@@ -14,7 +14,7 @@ irradiance fit when it is on by default), every sun drawn as Blender 4.5 /
   (a) accuracy: each frame's irradiance relative RMSE (luminance, 1000
       Fibonacci normals) against that frame's own map is at most the error
       of Debevec's median cut rebuilt for that frame (its rectangles' RMS
-      radius drawn as the suns' angles, scripts/lights_median_cut.py);
+      radius drawn as the suns' angles, bench/helpers/median_cut.py);
   (b) steadiness: the flux-weighted 95th percentile of every light's step
       between consecutive frames, once the map's own motion (the known
       rotation) is removed, is below 1 degree;
@@ -42,28 +42,21 @@ import time
 
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-sys.path.insert(0, os.path.join(ROOT, "bench"))
-import lights_make_test_videos as data  # noqa: E402
-from lights_median_cut import median_cut_suns  # noqa: E402
-import svg_plot  # noqa: E402
-from bench_doc import lock_path, locked, write_section  # noqa: E402
-import _penumbra  # noqa: E402  (lights_make_test_videos put it on sys.path)
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
+from bench.helpers import svg_plot, test_videos as data  # noqa: E402
+from bench.helpers.doc_section import lock_path, locked, write_section  # noqa: E402
+from bench.helpers.median_cut import median_cut_suns  # noqa: E402
+from bench.helpers.metrics import rel_rmse  # noqa: E402
+from bench.helpers.paths import ROOT, compiled_core  # noqa: E402
+
+_penumbra = compiled_core()
 
 L = _penumbra.lights
-Y = np.array([0.2126, 0.7152, 0.0722])
 WIDTH = 512
 COUNT = 64
 FPS = 24.0
 MODEL = "BLENDER4_CONE"
 SECTION = "## Video (issue #14 goal 2)"
-
-
-def rel_rmse(e, ref):
-    d = (e - ref) @ Y
-    r = ref @ Y
-    return math.sqrt((d @ d) / (r @ r))
 
 
 def rotation_z(degrees):
@@ -115,11 +108,8 @@ def weighted_percentile(values, weights, q):
 
 
 def flicker(irradiances):
-    changes = []
-    for a, b in zip(irradiances, irradiances[1:]):
-        d = (b - a) @ Y
-        changes.append(math.sqrt((d @ d) / ((a @ Y) @ (a @ Y))))
-    return float(np.mean(changes))
+    """Mean relative RMS change of irradiance between consecutive frames."""
+    return float(np.mean([rel_rmse(b, a) for a, b in zip(irradiances, irradiances[1:])]))
 
 
 def criteria(maps, motion, rig, normals, refs, median):

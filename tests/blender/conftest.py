@@ -13,6 +13,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 BUILD_ADDON = os.path.join(ROOT, "build", "addon")
 if BUILD_ADDON not in sys.path:
     sys.path.insert(0, BUILD_ADDON)
+if ROOT not in sys.path:
+    sys.path.append(ROOT)  # bench.helpers: what the tests share with the benchmarks
 
 import blender_window  # noqa: E402  (tests/blender is on sys.path: pytest's rootdir-relative imports)
 

@@ -1,21 +1,18 @@
 """The light-rig bindings: lights of synthetic maps against closed forms and
 a numpy reference, bad input, sequences and videos made by
-scripts/lights_make_test_videos.py."""
+bench/helpers/test_videos.py."""
 
 import math
 import os
 import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 import _penumbra
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-import lights_make_test_videos as videos  # noqa: E402
-from lights_median_cut import median_cut, median_cut_suns  # noqa: E402
+from bench.helpers import test_videos as videos
+from bench.helpers.median_cut import median_cut, median_cut_suns
 
 from conftest import BLENDER_OCIO  # noqa: E402
 
@@ -37,7 +34,7 @@ def relative_irradiance_error(directions, rgb, normals, reference):
 
 def test_region_lights_are_within_1_2x_median_cut_irradiance_error_of_a_bundled_world():
     """Against a numpy reference over 300 normals, with Debevec's median cut
-    (scripts/lights_median_cut.py) on the same map in the same test as the
+    (bench/helpers/median_cut.py) on the same map in the same test as the
     bar: Penumbra measures 0.5–0.7 %, the paper's method scores ~5 %, so a
     fixed 5 % could not catch a regression."""
     image = videos.load_world("forest", 256)
