@@ -13,6 +13,7 @@ import _penumbra
 
 from bench.helpers import test_videos as videos
 from bench.helpers.median_cut import median_cut, median_cut_suns
+from bench.helpers.metrics import rel_rmse
 
 from conftest import BLENDER_OCIO  # noqa: E402
 
@@ -27,9 +28,7 @@ def numpy_irradiance(image, normals):
 
 
 def relative_irradiance_error(directions, rgb, normals, reference):
-    y = np.array([0.2126, 0.7152, 0.0722])
-    e = _penumbra.lights.irradiance(directions, rgb, normals)
-    return math.sqrt((((e - reference) @ y) ** 2).sum() / ((reference @ y) ** 2).sum())
+    return rel_rmse(_penumbra.lights.irradiance(directions, rgb, normals), reference)
 
 
 def test_region_lights_are_within_1_2x_median_cut_irradiance_error_of_a_bundled_world():
@@ -60,11 +59,9 @@ def test_the_fitted_rig_has_at_most_half_median_cuts_irradiance_error_drawn_as_s
     image = np.maximum(videos.load_world("sunrise", 256), 0)
     normals = _penumbra.sh.fibonacci_directions(300)
     reference = numpy_irradiance(image, normals)
-    y = np.array([0.2126, 0.7152, 0.0722])
 
     def error(d, rgb, spread):
-        e = _penumbra.lights.irradiance(d, rgb, normals, spread=spread, sun_model=sun_model)
-        return math.sqrt((((e - reference) @ y) ** 2).sum() / ((reference @ y) ** 2).sum())
+        return rel_rmse(_penumbra.lights.irradiance(d, rgb, normals, spread=spread, sun_model=sun_model), reference)
 
     fitted = _penumbra.lights.frame_lights(image, count=16, fit_irradiance=True, sun_model=sun_model)
     np.testing.assert_allclose(fitted["rgb"].sum(axis=0), fitted["total_rgb"], rtol=1e-12)
