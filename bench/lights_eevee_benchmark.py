@@ -13,8 +13,8 @@ and its pictures (docs/lights/eevee_*.png):
     .venv/bin/python bench/lights_eevee_benchmark.py [--lock /work/bench.lock]
 
 Each Blender runs bench/blender_scripts/lights_eevee_render.py (OUT ENGINE)
-and prints one RESULT line of JSON. PENUMBRA_BENCH_QUICK=1: one rig, few samples (a smoke
-test of the script, not a result).
+and prints one RESULT line of JSON. PENUMBRA_BENCH_QUICK=1: one rig, few
+samples (a smoke test of the script, not a result).
 
 EEVEE Legacy lights the scene with at most 128 lights and gives cascaded
 shadow maps to at most 8 suns; EEVEE Next has neither cap (virtual shadow
