@@ -25,41 +25,12 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
 from bench.helpers import svg_plot, test_videos as data  # noqa: E402
 from bench.helpers.doc_section import write_section  # noqa: E402
-from bench.helpers.median_cut import median_cut_suns  # noqa: E402
-from bench.helpers.metrics import rel_rmse  # noqa: E402
+from bench.helpers.lights_fit_criteria import COUNTS, GOAL, MODELS, measure, meets_goal  # noqa: E402
 from bench.helpers.paths import ROOT, compiled_core  # noqa: E402
 
 _penumbra = compiled_core()
 
-COUNTS = (4, 16, 64, 256)
-MODELS = {"3.4": "BLENDER3_DISC", "4.5 / 5.x": "BLENDER4_CONE"}
-GOAL = {4: 1.0, 16: 0.5, 64: 0.5, 256: 0.5}
 SECTION = "## Irradiance fit (issue #14 goal 1)"
-
-
-def measure(maps, normals):
-    """rows[(blender, hdri, n)] = {method: (error, seconds)}."""
-    L = _penumbra.lights
-    rows = {}
-    for name, image, ref in maps:
-        for n in COUNTS:
-            d, rgb, spread = median_cut_suns(image, n)
-            started = time.time()
-            region = L.frame_lights(image, count=n, max_width=0, fit_irradiance=False)
-            region_seconds = time.time() - started
-            for blender, model in MODELS.items():
-                row = rows.setdefault((blender, name, n), {})
-                row["median cut"] = rel_rmse(L.irradiance(d, rgb, normals, spread=spread, sun_model=model), ref)
-                row["region power"] = rel_rmse(L.irradiance(region["directions"], region["rgb"], normals,
-                                                            spread=region["spread"], sun_model=model), ref)
-                started = time.time()
-                fit = L.frame_lights(image, count=n, max_width=0, fit_irradiance=True, sun_model=model)
-                row["seconds"] = time.time() - started
-                row["region seconds"] = region_seconds
-                row["region power + fit"] = rel_rmse(L.irradiance(fit["directions"], fit["rgb"], normals,
-                                                                  spread=fit["spread"], sun_model=model), ref)
-                print(f"  {blender} {name} N={n}: " + ", ".join(f"{k} {v:.4g}" for k, v in row.items()), flush=True)
-    return rows
 
 
 def table(rows, names):
@@ -71,7 +42,7 @@ def table(rows, names):
             for n in COUNTS:
                 r = rows[(blender, name, n)]
                 ratio = r["region power + fit"] / r["median cut"]
-                ok = ratio <= GOAL[n]
+                ok = meets_goal(r, n)
                 passed, total = passed + ok, total + 1
                 lines.append(f"| {blender} | {name} | {n} | {100 * r['median cut']:.3f}% "
                              f"| {100 * r['region power']:.3f}% ({r['region power'] / r['median cut']:.2f}×) "

