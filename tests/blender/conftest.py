@@ -25,11 +25,19 @@ def pytest_report_header(config):
             f"{mode})")
 
 
+# Test files that run in one Blender only, collected in no other (a skip
+# would count as a failure): docs/architecture.md's calls are bpy 4.5's.
+ONLY_IN = {"test_architecture_calls.py": (4, 5)}
+
+
 def pytest_ignore_collect(collection_path, config):
     """Tests of the window manager (`*_window.py`, see blender_window.py) run
-    only in a windowed Blender, every other test only in a background one."""
+    only in a windowed Blender, every other test only in a background one;
+    the files of ONLY_IN only in their Blender."""
     name = collection_path.name
     if collection_path.is_file() and name.startswith("test_") and name.endswith(".py"):
+        if name in ONLY_IN and tuple(bpy.app.version[:2]) != ONLY_IN[name]:
+            return True
         return name.endswith("_window.py") != blender_window.windowed()
     return None
 
