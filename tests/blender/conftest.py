@@ -25,9 +25,14 @@ def pytest_report_header(config):
             f"{mode})")
 
 
-# Test files that run in one Blender only, collected in no other (a skip
-# would count as a failure): docs/architecture.md's calls are bpy 4.5's.
-ONLY_IN = {"test_architecture_calls.py": (4, 5)}
+# Test files that run in one Blender only and are not even collected in the
+# others (a skip would count as a failure): docs/architecture.md's calls are
+# bpy 4.5's; the benchmark criteria checks run in the Blender their
+# benchmark runs in, as their answer does not depend on the version and their
+# cost would triple.
+ONLY_IN = {"test_architecture_calls.py": (4, 5),
+           "test_colormap_criteria.py": (4, 5),
+           "test_visibility_criteria.py": (4, 5)}
 
 
 def pytest_ignore_collect(collection_path, config):
@@ -40,22 +45,6 @@ def pytest_ignore_collect(collection_path, config):
             return True
         return name.endswith("_window.py") != blender_window.windowed()
     return None
-
-
-def pytest_configure(config):
-    config.addinivalue_line("markers", "only_in_blender(major, minor): run in that Blender alone")
-
-
-def pytest_collection_modifyitems(config, items):
-    """A test marked only_in_blender(4, 5) is deselected (not skipped: a skip
-    fails the run) in the other Blenders: for checks of a benchmark's
-    criterion whose cost would triple and whose answer does not depend on
-    the Blender version."""
-    elsewhere = [item for item in items if (mark := item.get_closest_marker("only_in_blender"))
-                 and tuple(bpy.app.version[:2]) != tuple(mark.args)]
-    if elsewhere:
-        config.hook.pytest_deselected(items=elsewhere)
-        items[:] = [item for item in items if item not in elsewhere]
 
 
 @pytest.fixture
