@@ -5,8 +5,9 @@ run: lookup build time against a brute-force sampled convolution, bilinear
 error against table size, the paper's height fit against the exact table,
 the footprint node against the camera's true footprint, and (issue #12) the
 plain ramp and Penumbra's filtered ramp against references over sample counts,
-scenes and seeds, in Cycles (bench/colormap_render.py, bpy module) and EEVEE
-Legacy (bench/colormap_eevee_render.py, Debian's Blender 3.4 under Xvfb),
+scenes and seeds, in Cycles (bench/blender_scripts/colormap_render.py, bpy
+module) and EEVEE Legacy (bench/blender_scripts/colormap_eevee_render.py,
+Debian's Blender 3.4 under Xvfb),
 with the issue's PASS/FAIL criteria printed at the end.
 
     make bench BENCH=colormap                          full sweep (~45 min on 2 cores)
@@ -16,7 +17,7 @@ with the issue's PASS/FAIL criteria printed at the end.
 The sweep's renders and results stay in out/colormap-bench/ (quick:
 out/colormap-bench-quick/, whose page is written there, not in docs/), so an
 interrupted run continues where it stopped. Environment: PENUMBRA_BENCH_OUT,
-PENUMBRA_BENCH_RENDERERS (cycles,eevee) and those of bench/colormap_render.py."""
+PENUMBRA_BENCH_RENDERERS (cycles,eevee) and those of bench/blender_scripts/colormap_render.py."""
 
 import json
 import math
@@ -30,11 +31,14 @@ import time
 
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "build", "addon", "penumbra"))
-import _penumbra as pen  # noqa: E402
-import svg_plot  # noqa: E402  (bench/, this script's folder)
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
+from bench.helpers import svg_plot  # noqa: E402
+from bench.helpers.colormap_criteria import criteria, seed_statistics  # noqa: E402
+from bench.helpers.paths import ROOT, compiled_core  # noqa: E402
 
+pen = compiled_core()
+
+SCRIPTS = os.path.join(ROOT, "bench", "blender_scripts")
 QUICK = os.environ.get("PENUMBRA_BENCH_QUICK", "0") not in ("", "0")
 SWEEP_OUT = os.path.abspath(os.environ.get("PENUMBRA_BENCH_OUT") or
                             os.path.join(ROOT, "out", "colormap-bench-quick" if QUICK else "colormap-bench"))
@@ -150,7 +154,7 @@ def bench_height():
 
 
 # ---- the sample-count sweep (issue #12) -------------------------------------
-# bench/colormap_render.py (Cycles, bpy module) and bench/colormap_eevee_render.py
+# bench/blender_scripts/colormap_render.py (Cycles, bpy module) and colormap_eevee_render.py
 # (EEVEE Legacy, Debian's Blender 3.4 under Xvfb) render; this reads their JSON.
 
 RENDERERS = [r for r in os.environ.get("PENUMBRA_BENCH_RENDERERS", "cycles,eevee").split(",") if r]
@@ -160,12 +164,12 @@ TITLE = {"cycles": "Cycles (CPU)", "eevee": "EEVEE Legacy (llvmpipe)"}
 
 def sweep_command(renderer):
     if renderer == "cycles":
-        return [os.path.join(ROOT, ".venv", "bin", "python"), os.path.join(ROOT, "bench", "colormap_render.py")]
+        return [os.path.join(ROOT, ".venv", "bin", "python"), os.path.join(SCRIPTS, "colormap_render.py")]
     for program in ("xvfb-run", "blender"):
         if shutil.which(program) is None:
             return f"`{program}` is not installed (the EEVEE sweep runs Debian's Blender 3.4 under Xvfb)"
     return ["xvfb-run", "-a", "blender", "-b", "--factory-startup", "--python-exit-code", "1", "--python",
-            os.path.join(ROOT, "bench", "colormap_eevee_render.py")]
+            os.path.join(SCRIPTS, "colormap_eevee_render.py")]
 
 
 def run_logged(command, log_path):
@@ -181,7 +185,7 @@ def run_logged(command, log_path):
             lines = log.read().splitlines()
         complete = lines if done else lines[:-1]
         for line in complete[seen:]:
-            if line.startswith("colormap sweep:"):
+            if line.startswith(("colormap_render:", "colormap_eevee_render:")):  # the sweeps' log lines
                 print("  " + line, flush=True)
         seen = max(seen, len(complete))
         if done:
@@ -205,62 +209,6 @@ def run_sweeps():
             continue
         with open(os.path.join(SWEEP_OUT, f"{renderer}_results.json")) as f:
             out[renderer] = json.load(f)
-    return out
-
-
-def seed_statistics(data, key="rmse"):
-    """{scene: {method: {n: dict(mean, std, seeds, seconds, cpu)}}} over the
-    seeds of the run's config of the error `key` (rmse: every pixel;
-    rmse_interior: pixels away from silhouettes); std is the sample standard
-    deviation (n − 1)."""
-    cfg, stats = data["config"], {}
-    for name in cfg["scenes"]:
-        for method in ("plain", "penumbra"):
-            for n in cfg["spp"]:
-                runs = [data["renders"].get(f"{name}|{method}|{n}|{seed}") for seed in range(cfg["seeds"])]
-                if any(r is None or r.get(key) is None for r in runs):
-                    continue
-                errors = np.array([r[key] for r in runs])
-                stats.setdefault(name, {}).setdefault(method, {})[n] = {
-                    "mean": float(errors.mean()), "std": float(errors.std(ddof=1)) if len(errors) > 1 else 0.0,
-                    "seeds": len(errors), "seconds": float(np.mean([r["seconds"] for r in runs])),
-                    "cpu": float(np.mean([r.get("cpu_seconds", r["seconds"]) for r in runs]))}
-    return stats
-
-
-def no_worse(pen, plain):
-    """Penumbra no worse than plain within 2σ: mean_pen − mean_plain ≤
-    2·sqrt(σ_pen² + σ_plain²)/sqrt(n) (two standard errors of the difference)."""
-    bound = 2.0 * math.sqrt(pen["std"] ** 2 + plain["std"] ** 2) / math.sqrt(pen["seeds"])
-    delta = pen["mean"] - plain["mean"]
-    return delta <= bound, (f"Δ = {delta:+.5f}, 2σ bound {bound:.5f} "
-                            f"(Penumbra {pen['mean']:.5f}, plain {plain['mean']:.5f})")
-
-
-def criteria(renderer, stats, cfg):
-    """[(PASS/FAIL/SKIP, scene, criterion, values)]: issue #12's "Done when" per scene."""
-    if renderer == "cycles":
-        tests = [("Penumbra at 1 spp < plain at 16 spp", ("penumbra", 1), ("plain", 16),
-                  lambda p, q: (p["mean"] < q["mean"], f"{p['mean']:.5f} vs {q['mean']:.5f}"))]
-        tests += [(f"{n} spp: Penumbra ≤ 0.8 × plain", ("penumbra", n), ("plain", n),
-                   lambda p, q: (p["mean"] <= 0.8 * q["mean"], f"{p['mean']:.5f} vs 0.8 × {q['mean']:.5f}"))
-                  for n in (4, 16)]
-        tests += [(f"{n} spp: Penumbra no worse than plain within 2σ", ("penumbra", n), ("plain", n), no_worse)
-                  for n in (64, 256)]
-    else:
-        tests = [("1 sample: Penumbra ≤ 0.5 × plain", ("penumbra", 1), ("plain", 1),
-                  lambda p, q: (p["mean"] <= 0.5 * q["mean"], f"{p['mean']:.5f} vs 0.5 × {q['mean']:.5f}"))]
-        tests += [(f"{n} samples: Penumbra no worse than plain within 2σ", ("penumbra", n), ("plain", n), no_worse)
-                  for n in (16, 64)]
-    out = []
-    for name in cfg["scenes"]:
-        for label, (ma, na), (mb, nb), test in tests:
-            a, b = stats.get(name, {}).get(ma, {}).get(na), stats.get(name, {}).get(mb, {}).get(nb)
-            if a is None or b is None:
-                out.append(("SKIP", name, label, "not measured in this run"))
-                continue
-            ok, values = test(a, b)
-            out.append(("PASS" if ok else "FAIL", name, label, values))
     return out
 
 
@@ -386,7 +334,7 @@ def sweep_method(results):
     out = []
     some = next((r for r in results.values() if isinstance(r, dict)), None)
     if some:
-        out += ["Scenes (`SCENES` in bench/colormap_render.py, built by examples/scenes/colormap_scene.py; Noise "
+        out += ["Scenes (`SCENES` in bench/blender_scripts/colormap_render.py, built by examples/scenes/colormap_scene.py; Noise "
                 "Texture in Object coordinates through a ColorRamp into an Emission shader, black world):", ""]
         out += [f"- `{name}` ({'×'.join(map(str, s['size']))}): {s['description']}"
                 for name, s in some["scenes"].items()]
@@ -521,12 +469,12 @@ def bench_footprint():
     py = os.path.join(ROOT, ".venv", "bin", "python")
     log_path = os.path.join(folder, "footprint.log")
     with open(log_path, "w") as log:
-        proc = subprocess.run([py, os.path.join(ROOT, "bench", "colormap_footprint.py"), "--", folder], cwd=ROOT,
+        proc = subprocess.run([py, os.path.join(SCRIPTS, "colormap_footprint.py"), "--", folder], cwd=ROOT,
                               stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
     if proc.returncode != 0:
         return out + ["footprint measurement failed:", "```", open(log_path).read()[-3000:], "```", ""]
     data = json.load(open(os.path.join(folder, "footprint_results.json")))
-    out += [f"`bench/colormap_footprint.py`, Blender {data['blender']}: a {data['size'][0]}×{data['size'][1]} camera "
+    out += [f"`bench/blender_scripts/colormap_footprint.py`, Blender {data['blender']}: a {data['size'][0]}×{data['size'][1]} camera "
             "1.2 above the plane z = 0 (yawed 8°), pitched from 30° (looking down) to 88° (the horizon in view). The node "
             "group's outputs are rendered at each pixel's centre; the truth is computed in Python from the camera: "
             "√area = square root of the area of the pixel's four corners projected onto the plane; major/minor = "

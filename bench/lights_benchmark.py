@@ -5,7 +5,7 @@ Accuracy: irradiance relative RMSE over 1000 Fibonacci normals against the
 exact irradiance of the full map (Σ L Ω max(0, n·ω) over every pixel), for
 Blender's eight bundled HDRIs at 1024x512, N = 4 ... 1024, geometric mean
 over the maps. Baseline in the same run: Debevec's median-cut light-probe
-sampling (2005) in numpy (scripts/lights_median_cut.py). RMSE definition:
+sampling (2005) in numpy (bench/helpers/median_cut.py). RMSE definition:
 sqrt(Σ_n ΔY²) / sqrt(Σ_n Y_ref²) on luminance.
 
 Flicker: slowly rotating map (0.5°/frame) and a map with 100 Hz mains flicker
@@ -29,23 +29,16 @@ import time
 
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-import lights_make_test_videos as data  # noqa: E402
-from lights_median_cut import median_cut  # noqa: E402
-import _penumbra  # noqa: E402  (lights_make_test_videos put it on sys.path)
-sys.path.insert(0, os.path.join(ROOT, "bench"))
-import lights_fit_benchmark  # noqa: E402
-import lights_video_benchmark  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
+from bench import lights_fit_benchmark, lights_video_benchmark  # noqa: E402  (their sections' headings)
+from bench.helpers import test_videos as data  # noqa: E402
+from bench.helpers.median_cut import median_cut  # noqa: E402
+from bench.helpers.metrics import rel_rmse  # noqa: E402
+from bench.helpers.paths import ROOT, compiled_core  # noqa: E402
 
-Y = np.array([0.2126, 0.7152, 0.0722])
+_penumbra = compiled_core()
+
 COUNTS = (4, 16, 64, 256, 1024)
-
-
-def rel_rmse(e, ref):
-    d = (e - ref) @ Y
-    r = ref @ Y
-    return math.sqrt((d @ d) / (r @ r))
 
 
 def accuracy(maps, normals):
@@ -113,81 +106,10 @@ def flicker_of(sequence, normals, rig_kind, fps):
         rig = b.finish()
         es = [_penumbra.lights.irradiance(rig["directions"][t], rig["rgb"][t], normals, spread=rig["spread"][t])
               for t in range(len(sequence))]
-    changes = []
-    for a, b in zip(es, es[1:]):
-        d = (b - a) @ Y
-        changes.append(math.sqrt((d @ d) / ((a @ Y) @ (a @ Y))))
+    changes = [rel_rmse(b, a) for a, b in zip(es, es[1:])]
     return float(np.mean(changes[4:-4]))
 
 
-# Runs in the bpy module (a fresh process): a sphere on a plane under
-# sunrise.exr, rendered with Cycles (CPU, no denoising) lit by the World, by
-# the World again with another seed (the noise floor), and by rigs of N suns
-# (World strength 0). Prints one JSON line of relative RMSEs.
-SHADOW_SCRIPT = r"""
-import json, math, os, sys, traceback
-sys.path.insert(0, sys.argv[1])
-sys.path.insert(0, sys.argv[5])
-import bpy
-import light_rig_scene
-import numpy as np
-try:
-    import penumbra
-    penumbra.register()
-    from penumbra import native
-    core = native.require()
-    out, counts, spp = sys.argv[2], [int(v) for v in sys.argv[3].split(",")], int(sys.argv[4])
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    hdri = os.path.join(bpy.utils.system_resource("DATAFILES"), "studiolights", "world", "sunrise.exr")
-    world = bpy.data.worlds.new("World")
-    scene.world = world
-    world.use_nodes = True
-    nt = world.node_tree
-    env = nt.nodes.new("ShaderNodeTexEnvironment")
-    env.image = bpy.data.images.load(hdri)
-    nt.links.new(env.outputs["Color"], nt.nodes["Background"].inputs["Color"])
-    light_rig_scene.sphere_on_plane(scene)
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = spp
-    scene.cycles.use_denoising = False
-    scene.render.resolution_x, scene.render.resolution_y = 128, 96
-    scene.render.resolution_percentage = 100
-    scene.render.film_transparent = True  # the background is black in every render (no World backdrop)
-    scene.render.image_settings.file_format = "OPEN_EXR"
-    scene.render.image_settings.color_depth = "32"
-
-    def render(name, seed):
-        scene.cycles.seed = seed
-        scene.render.filepath = os.path.join(out, name)
-        bpy.ops.render.render(write_still=True)
-        return core.image.read(scene.render.filepath + ".exr")
-
-    world_a = render("world_a", 1)
-    world_b = render("world_b", 2)
-    mask = np.ones(world_a.shape[:2], bool)
-    y = np.array([0.2126, 0.7152, 0.0722])
-
-    def rel(img, ref=world_a):
-        d = (img - ref) @ y
-        return float(np.sqrt(np.mean(d[mask] ** 2)) / np.mean((world_a @ y)[mask]))
-
-    result = {"noise": rel(world_b), "noise mean": float(np.mean((world_b @ y)[mask]) / np.mean((world_a @ y)[mask]))}
-    for n in counts:
-        world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
-        r = bpy.ops.penumbra.build_light_rig(filepath="", count=n, json_path=os.path.join(out, "rig.json"))
-        assert r == {"FINISHED"}, r
-        world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.0
-        rig_a = render(f"rig_{n}", 1)
-        result[str(n)] = rel(rig_a)
-        result[f"{n} mean"] = float(np.mean((rig_a @ y)[mask]) / np.mean((world_a @ y)[mask]))
-        result[f"{n} noise"] = rel(render(f"rig_{n}_b", 2), rig_a)  # the rig render's own noise
-    print("RESULT " + json.dumps(result))
-except Exception:
-    traceback.print_exc()
-    sys.exit(1)
-"""
 SHADOW_COUNTS = (16, 64, 256)
 SHADOW_SPP = 128
 
@@ -198,13 +120,9 @@ def shadowed_comparison():
     import subprocess
     import tempfile
     python = os.path.join(ROOT, ".venv", "bin", "python")
+    script = os.path.join(ROOT, "bench", "blender_scripts", "lights_shadowed_render.py")
     with tempfile.TemporaryDirectory(prefix="penumbra_lights_shadows_") as tmp:
-        script = os.path.join(tmp, "shadows.py")
-        with open(script, "w") as f:
-            f.write(SHADOW_SCRIPT)
-        res = subprocess.run([python, script, os.path.join(ROOT, "build", "addon"), tmp,
-                              ",".join(str(n) for n in SHADOW_COUNTS), str(SHADOW_SPP),
-                              os.path.join(ROOT, "examples", "scenes")],
+        res = subprocess.run([python, script, tmp, ",".join(str(n) for n in SHADOW_COUNTS), str(SHADOW_SPP)],
                              capture_output=True, text=True, timeout=1200)
         line = [x for x in res.stdout.splitlines() if x.startswith("RESULT ")]
         if res.returncode != 0 or not line:

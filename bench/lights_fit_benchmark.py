@@ -16,58 +16,21 @@ fit uses 6 other normals per light, 642 to 2562). Time: the whole
 It replaces the "Irradiance fit" section of docs/lights-benchmark.md and
 writes docs/lights/irradiance_fit.svg."""
 
-import math
 import os
 import sys
 import time
 
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-sys.path.insert(0, os.path.join(ROOT, "bench"))
-import lights_make_test_videos as data  # noqa: E402
-from lights_median_cut import median_cut_suns  # noqa: E402
-import svg_plot  # noqa: E402
-from bench_doc import write_section  # noqa: E402
-import _penumbra  # noqa: E402  (lights_make_test_videos put it on sys.path)
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
+from bench.helpers import svg_plot, test_videos as data  # noqa: E402
+from bench.helpers.doc_section import write_section  # noqa: E402
+from bench.helpers.lights_fit_criteria import COUNTS, GOAL, MODELS, measure, meets_goal  # noqa: E402
+from bench.helpers.paths import ROOT, compiled_core  # noqa: E402
 
-Y = np.array([0.2126, 0.7152, 0.0722])
-COUNTS = (4, 16, 64, 256)
-MODELS = {"3.4": "BLENDER3_DISC", "4.5 / 5.x": "BLENDER4_CONE"}
-GOAL = {4: 1.0, 16: 0.5, 64: 0.5, 256: 0.5}
+_penumbra = compiled_core()
+
 SECTION = "## Irradiance fit (issue #14 goal 1)"
-
-
-def rel_rmse(e, ref):
-    d = (e - ref) @ Y
-    r = ref @ Y
-    return math.sqrt((d @ d) / (r @ r))
-
-
-def measure(maps, normals):
-    """rows[(blender, hdri, n)] = {method: (error, seconds)}."""
-    L = _penumbra.lights
-    rows = {}
-    for name, image, ref in maps:
-        for n in COUNTS:
-            d, rgb, spread = median_cut_suns(image, n)
-            started = time.time()
-            region = L.frame_lights(image, count=n, max_width=0, fit_irradiance=False)
-            region_seconds = time.time() - started
-            for blender, model in MODELS.items():
-                row = rows.setdefault((blender, name, n), {})
-                row["median cut"] = rel_rmse(L.irradiance(d, rgb, normals, spread=spread, sun_model=model), ref)
-                row["region power"] = rel_rmse(L.irradiance(region["directions"], region["rgb"], normals,
-                                                            spread=region["spread"], sun_model=model), ref)
-                started = time.time()
-                fit = L.frame_lights(image, count=n, max_width=0, fit_irradiance=True, sun_model=model)
-                row["seconds"] = time.time() - started
-                row["region seconds"] = region_seconds
-                row["region power + fit"] = rel_rmse(L.irradiance(fit["directions"], fit["rgb"], normals,
-                                                                  spread=fit["spread"], sun_model=model), ref)
-                print(f"  {blender} {name} N={n}: " + ", ".join(f"{k} {v:.4g}" for k, v in row.items()), flush=True)
-    return rows
 
 
 def table(rows, names):
@@ -79,7 +42,7 @@ def table(rows, names):
             for n in COUNTS:
                 r = rows[(blender, name, n)]
                 ratio = r["region power + fit"] / r["median cut"]
-                ok = ratio <= GOAL[n]
+                ok = meets_goal(r, n)
                 passed, total = passed + ok, total + 1
                 lines.append(f"| {blender} | {name} | {n} | {100 * r['median cut']:.3f}% "
                              f"| {100 * r['region power']:.3f}% ({r['region power'] / r['median cut']:.2f}×) "

@@ -23,35 +23,14 @@ import sys
 import tempfile
 import time
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
+from bench.helpers.doc_section import lock_path, locked, write_section  # noqa: E402
+from bench.helpers.paths import ROOT  # noqa: E402
+
 WORLD = "/usr/share/blender/datafiles/studiolights/world/forest.exr"
 OUT = os.path.join(ROOT, "docs", "lights-timing-benchmark.md")
-from bench_doc import lock_path, locked, write_section  # noqa: E402  (bench/ is the script's directory)
-
-# Runs inside the bpy module (a fresh process): operator on the 16k file.
-BPY_SCRIPT = r"""
-import os, resource, sys, time, traceback
-sys.path.insert(0, sys.argv[1])
-import bpy
-import penumbra
-penumbra.register()
-base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-t0 = time.perf_counter()
-if sys.argv[3] == "run":
-  try:
-    r = bpy.ops.penumbra.build_light_rig(filepath=sys.argv[2], count=64, frame_start=1, frame_end=1,
-                                         json_path=sys.argv[2] + ".json")
-    assert r == {"FINISHED"}, r
-    coll = bpy.context.scene.penumbra.light_rig.collection
-    assert len([o for o in coll.objects if o.type == "LIGHT"]) == 64
-  except Exception:
-    traceback.print_exc()
-    sys.exit(1)
-t = time.perf_counter() - t0
-print("RESULT", t * 1000, base, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
-penumbra.unregister()
-"""
-
+# The operator on the 16k file, in the bpy module.
+RIG_16K = os.path.join(ROOT, "bench", "blender_scripts", "lights_rig_16k.py")
 
 def run_16k(exe, tmp):
     path = os.path.join(tmp, "map16k.exr")
@@ -68,11 +47,7 @@ def run_16k(exe, tmp):
     bpy_row = None
     python = os.path.join(ROOT, ".venv", "bin", "python")
     if os.path.exists(python):
-        script = os.path.join(tmp, "bpy_16k.py")
-        with open(script, "w") as f:
-            f.write(BPY_SCRIPT)
-        addon = os.path.join(ROOT, "build", "addon")
-        res = subprocess.run([python, script, addon, path, "run"], capture_output=True, text=True, timeout=300)
+        res = subprocess.run([python, RIG_16K, path, "run"], capture_output=True, text=True, timeout=300)
         line = [x for x in res.stdout.splitlines() if x.startswith("RESULT")]
         if res.returncode == 0 and line:
             ms, base, peak = (float(v) for v in line[0].split()[1:])

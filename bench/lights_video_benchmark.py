@@ -2,7 +2,7 @@
 """Issue #14 goal 2: light rigs steady on video (not a test; `make bench`).
 
 Sequences, made in memory from Blender's bundled HDRIs
-(scripts/lights_make_test_videos.py) at WIDTH x WIDTH/2: rotations about +Z
+(bench/helpers/test_videos.py) at WIDTH x WIDTH/2: rotations about +Z
 of 0.5, 1 and 2 degrees per frame, a cross-fade between two HDRIs over 40
 frames, and +-2 % exposure noise per frame (each frame's map times a factor
 drawn uniformly in [0.98, 1.02]). Each is turned into a rig with
@@ -14,7 +14,7 @@ irradiance fit when it is on by default), every sun drawn as Blender 4.5 /
   (a) accuracy: each frame's irradiance relative RMSE (luminance, 1000
       Fibonacci normals) against that frame's own map is at most the error
       of Debevec's median cut rebuilt for that frame (its rectangles' RMS
-      radius drawn as the suns' angles, scripts/lights_median_cut.py);
+      radius drawn as the suns' angles, bench/helpers/median_cut.py);
   (b) steadiness: the flux-weighted 95th percentile of every light's step
       between consecutive frames, once the map's own motion (the known
       rotation) is removed, is below 1 degree;
@@ -35,40 +35,26 @@ it replaces its section of docs/lights-benchmark.md and writes
 docs/lights/video_delay.svg."""
 
 
-import math
 import os
 import sys
 import time
 
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-sys.path.insert(0, os.path.join(ROOT, "bench"))
-import lights_make_test_videos as data  # noqa: E402
-from lights_median_cut import median_cut_suns  # noqa: E402
-import svg_plot  # noqa: E402
-from bench_doc import lock_path, locked, write_section  # noqa: E402
-import _penumbra  # noqa: E402  (lights_make_test_videos put it on sys.path)
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
+from bench.helpers import svg_plot, test_videos as data  # noqa: E402
+from bench.helpers.doc_section import lock_path, locked, write_section  # noqa: E402
+from bench.helpers.lights_video_criteria import (COUNT, FPS, MODEL, build_rig, rig_irradiances,  # noqa: E402
+                                                 rotation_z, steadiness, steady)
+from bench.helpers.median_cut import median_cut_suns  # noqa: E402
+from bench.helpers.metrics import rel_rmse  # noqa: E402
+from bench.helpers.paths import ROOT, compiled_core  # noqa: E402
+
+_penumbra = compiled_core()
 
 L = _penumbra.lights
-Y = np.array([0.2126, 0.7152, 0.0722])
 WIDTH = 512
-COUNT = 64
-FPS = 24.0
-MODEL = "BLENDER4_CONE"
 SECTION = "## Video (issue #14 goal 2)"
-
-
-def rel_rmse(e, ref):
-    d = (e - ref) @ Y
-    r = ref @ Y
-    return math.sqrt((d @ d) / (r @ r))
-
-
-def rotation_z(degrees):
-    a = math.radians(degrees)
-    return np.array([[math.cos(a), -math.sin(a), 0.0], [math.sin(a), math.cos(a), 0.0], [0.0, 0.0, 1.0]])
 
 
 def sequences(frames=40):
@@ -88,61 +74,17 @@ def sequences(frames=40):
     return out
 
 
-def build_rig(maps, **options):
-    b = L.RigBuilder(count=COUNT, frames_per_second=FPS, sun_model=MODEL, max_width=0, **options)
-    for m in maps:
-        b.add_frame(m)
-    return b.finish()
-
-
-def steps(rig, motion):
-    """Per (frame pair, light): the angle moved once `motion` is removed, and the light's flux share."""
-    d, p = rig["directions"], rig["power"]
-    out = []
-    for t in range(1, len(d)):
-        predicted = d[t - 1] @ motion.T
-        angle = np.degrees(np.arccos(np.clip(np.sum(predicted * d[t], axis=1), -1.0, 1.0)))
-        share = np.maximum(p[t - 1] / max(p[t - 1].sum(), 1e-300), p[t] / max(p[t].sum(), 1e-300))
-        out.append((angle, share))
-    return out
-
-
-def weighted_percentile(values, weights, q):
-    order = np.argsort(values)
-    v, w = values[order], weights[order]
-    c = np.cumsum(w)
-    return float(v[np.searchsorted(c, q * c[-1])]) if c[-1] > 0 else 0.0
-
-
-def flicker(irradiances):
-    changes = []
-    for a, b in zip(irradiances, irradiances[1:]):
-        d = (b - a) @ Y
-        changes.append(math.sqrt((d @ d) / ((a @ Y) @ (a @ Y))))
-    return float(np.mean(changes))
-
-
 def criteria(maps, motion, rig, normals, refs, median):
     """The four criteria of one rig over one sequence."""
-    es = [L.irradiance(rig["directions"][t], rig["rgb"][t], normals, spread=rig["spread"][t], sun_model=MODEL)
-          for t in range(len(maps))]
+    es = rig_irradiances(rig, normals)
     errors = np.array([rel_rmse(e, r) for e, r in zip(es, refs)])
     ratio = errors / median
-    st = steps(rig, motion)
-    angles = np.concatenate([a for a, _ in st])
-    shares = np.concatenate([s for _, s in st])
-    big = shares >= 0.01
     return {"worst ratio": float(ratio.max()), "mean error": float(errors.mean()),
-            "median cut error": float(median.mean()),
-            "p95 step": weighted_percentile(angles, shares, 0.95),
-            "largest big step": float(angles[big].max()) if big.any() else 0.0,
-            "jumps": int(np.sum(big & (angles > 5.0))),
-            "flicker": flicker(es), "map flicker": flicker(refs)}
+            "median cut error": float(median.mean()), **steadiness(rig, motion, es, refs)}
 
 
 def passes(c):
-    return {"a": c["worst ratio"] <= 1.0, "b": c["p95 step"] < 1.0, "c": c["jumps"] == 0,
-            "d": c["flicker"] <= 1.1 * c["map flicker"]}
+    return {"a": c["worst ratio"] <= 1.0, **steady(c)}
 
 
 VARIANTS = {

@@ -18,31 +18,28 @@ import time
 import bpy
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "build", "addon"))
-sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
+from bench.helpers.paths import DOCS, ROOT, use_addon  # noqa: E402
 
+use_addon()
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
 from penumbra.visibility import bake, scene_data  # noqa: E402
 import visibility_character  # noqa: E402
-from svg_plot import svg_plot  # noqa: E402
-from cycles_ao_bake import cycles_ao  # noqa: E402  (bench/, this script's folder)
-import visibility_runtime  # noqa: E402  (bench/ too)
+from bench.helpers import visibility_frame_change  # noqa: E402
+from bench.helpers.cycles_ao import cycles_ao  # noqa: E402
+from bench.helpers.log import log  # noqa: E402
+from bench.helpers.svg_plot import svg_plot  # noqa: E402
+from bench.helpers.visibility_training import baked_sh, bake_frames, model_sh  # noqa: E402
 
 QUICK = "--quick" in sys.argv
 RUNTIME_ONLY = "--runtime" in sys.argv  # only the run-time section (docs rewritten in place)
-DOCS = os.path.join(ROOT, "docs")
 FRAMES = 48
 TRAIN = list(range(2, FRAMES + 1, 2))     # 24 training poses
 UNSEEN = list(range(1, FRAMES, 4))        # 12 poses never baked into the model
 RAYS = [64, 128] if QUICK else [64, 128, 256, 512, 1024]
 LOBES = [1, 2, 3, 4]
 DETAIL = 1.5 if QUICK else 3.4            # 10k vertices
-
-
-def log(*args):
-    print("bench_visibility:", *args, flush=True)
 
 
 def raw_throughput(mesh, rays_per_vertex, threads, mode):
@@ -70,29 +67,6 @@ def new_character(detail, frames=FRAMES):
     return obj, rig
 
 
-def bake_frames(obj, frames, rays, pipelined=False, **kwargs):
-    """Training set for an explicit frame list, baked as the operator bakes
-    (one job; pipelined: the next frame is read while the current one is traced)."""
-    started = time.perf_counter()
-    job = bake.BakeJob(bpy.context, obj, frames[0], frames[0], 1, rays, 1, 4, kwargs.get("occluders"),
-                       kwargs.get("below_horizon", "occluded"))
-    job.frames = [(None, f) for f in frames]
-    setup = time.perf_counter() - started
-    started = time.perf_counter()
-    try:
-        if pipelined:
-            bake.bake_frames(job, overlap=True)
-        else:
-            for entry in job.frames:
-                job.bake(job.gather(entry))
-    finally:
-        job.restore_frame()
-    seconds = time.perf_counter() - started
-    bake_frames.last_trace_seconds = job.seconds_trace
-    bake_frames.last_breakdown = dict(job.seconds, job_setup=setup, total=seconds)
-    return job.training, seconds, job.rays_cast, job
-
-
 def per_frame_errors(model, unseen):
     return [model.evaluate(unseen.subset([i]))["ao_mean_abs"] for i in range(len(unseen))]
 
@@ -102,23 +76,10 @@ def sh_errors(predicted, truth):
     return np.sqrt(((predicted - truth) ** 2).sum(axis=-1) / (4 * np.pi))
 
 
-def model_sh(model, unseen, joints_index):
-    out = []
-    for i in range(len(unseen)):
-        rotations = unseen.bone_rotations(i)[joints_index]
-        _, _, params = model.synthesize(rotations)
-        out.append(native.module.visibility.zh_params_to_sh(params.astype(np.float64)))
-    return np.stack(out)
-
-
-def truth_sh(unseen):
-    return np.stack([unseen.visibility(i).astype(np.float64) for i in range(len(unseen))])
-
-
 def runtime_costs(detail, repeats=15):
     """One frame change of the character with Penumbra (2 lobes, order 4,
     Phong) against Blender's own frame change without it, alternated frame by
-    frame in the same run (bench/visibility_runtime.py); the model is baked
+    frame in the same run (bench/visibility_frame_change.py); the model is baked
     from 4 frames at 16 rays: the run time's cost does not depend on how well
     the model was baked."""
     obj, rig = new_character(detail, frames=8)
@@ -127,18 +88,18 @@ def runtime_costs(detail, repeats=15):
     bpy.context.scene.world = world
     path = os.path.join(bpy.app.tempdir or "/tmp", f"bench_runtime_{detail}.pzh")
     bpy.ops.penumbra.bake_visibility(frame_start=1, frame_end=8, frame_step=2, rays=16, lobes=2, filepath=path)
-    result = visibility_runtime.frame_change_costs(obj, list(range(1, 9)), repeats)
-    log(visibility_runtime.summary(result))
+    result = visibility_frame_change.frame_change_costs(obj, list(range(1, 9)), repeats)
+    log(visibility_frame_change.summary(result))
     return result
 
 
 def runtime_section(runtime_results):
     """The "Run time per frame" section of docs/visibility-benchmark.md."""
     lines = ["## Run time per frame (handler, median)", "",
-             visibility_runtime.DESCRIPTION + " The realistic character's frame change at ~100k vertices is in "
+             visibility_frame_change.DESCRIPTION + " The realistic character's frame change at ~100k vertices is in "
              "[visibility-humanoid-benchmark.md](visibility-humanoid-benchmark.md). Run alone: `.venv/bin/python "
              "bench/visibility_benchmark.py --runtime`.", ""]
-    lines += visibility_runtime.table(runtime_results.values())
+    lines += visibility_frame_change.table(runtime_results.values())
     big = max(runtime_results.values(), key=lambda x: x["vertices"])
     lines += ["", f"Goal (issue #13): the whole frame change at ~100k vertices at most 4.5× Blender's own. Measured: "
               f"**{big['ratio']:.2f}×** at {big['vertices']} vertices — "
@@ -155,7 +116,7 @@ def runtime_section(runtime_results):
                       f"{name} {ns:.0f} ns/vertex" + (f" ({scalar / ns:.1f}× the scalar one)" if scalar else "")
                       for name, ns in kernel.items())
                   + ". SSE4 is what the default x86-64-v2 build ran before the run-time dispatch."]
-    lines += ["", visibility_runtime.accuracy_line(runtime_results.values())]
+    lines += ["", visibility_frame_change.accuracy_line(runtime_results.values())]
     return lines
 
 
@@ -164,7 +125,7 @@ def run_runtime_only():
     penumbra.register()
     results = {"10k": runtime_costs(3.4, repeats=21), "100k": runtime_costs(11, repeats=21)}
     penumbra.unregister()
-    results["100k"]["kernel_ns_per_vertex"] = visibility_runtime.kernel_per_target()
+    results["100k"]["kernel_ns_per_vertex"] = visibility_frame_change.kernel_per_target()
     path = os.path.join(DOCS, "visibility-benchmark.md")
     with open(path) as f:
         text = f.read()
@@ -241,8 +202,10 @@ def main():
     paths = {}
     raw_before = raw_posed()
     for name, pipelined in (("sequential", False), ("pipelined", True), ("sequential, again", False)):
-        _, seconds, cast, _ = bake_frames(obj, TRAIN, 128, pipelined=pipelined)
-        paths[name] = dict(bake_frames.last_breakdown, rays_cast=cast, rays_per_second=cast / seconds)
+        baked = bake_frames(obj, TRAIN, 128, overlap=pipelined)
+        cast = baked.job.rays_cast
+        paths[name] = dict(baked.job.seconds, job_setup=baked.setup_seconds, total=baked.seconds, rays_cast=cast,
+                           rays_per_second=cast / baked.seconds)
     raw_after = raw_posed()
     # The faster of the two as the baseline: a load spike from other jobs
     # during one raw measurement must not flatter the bake.
@@ -257,9 +220,9 @@ def main():
 
     sweep, bakes = [], {}
     for rays in RAYS:
-        train, seconds, cast, job = bake_frames(obj, TRAIN, rays)
-        trace_seconds = bake_frames.last_trace_seconds
-        unseen, _, _, _ = bake_frames(obj, UNSEEN, rays)
+        train, seconds, _, job = bake_frames(obj, TRAIN, rays)
+        cast, trace_seconds = job.rays_cast, job.seconds_trace
+        unseen = bake_frames(obj, UNSEEN, rays).training
         bakes[rays] = (train, unseen)
         log(f"rays {rays}: bake {seconds:.1f} s, {cast / seconds / 1e6:.2f} M rays/s end to end, "
             f"{cast / trace_seconds / 1e6:.2f} M rays/s in the C++ bake")
@@ -292,10 +255,10 @@ def main():
     results["sweep"] = sweep
     results["lobe_rays"] = 256 if not QUICK else RAYS[-1]
     # The direction set's own error: AO of each ray count against the largest.
-    top = truth_sh(bakes[RAYS[-1]][1])
+    top = baked_sh(bakes[RAYS[-1]][1])
     top_ao = np.stack([core.visibility.ambient_occlusion(f) for f in top])
     results["ray_noise_ao"] = {
-        r: float(np.abs(np.stack([core.visibility.ambient_occlusion(f) for f in truth_sh(bakes[r][1])]) - top_ao).mean())
+        r: float(np.abs(np.stack([core.visibility.ambient_occlusion(f) for f in baked_sh(bakes[r][1])]) - top_ao).mean())
         for r in RAYS}
 
     # Paper fig. 3: fit plain visibility then convolve, vs fit cosine-weighted visibility.
@@ -305,12 +268,10 @@ def main():
     unseen_cos = bake_weighted(obj, UNSEEN, fig_rays, "cosine")
     model_plain, _ = core.visibility.fit_model(train_plain, influence, lobes=2)
     model_cos, _ = core.visibility.fit_model(train_cos, influence, lobes=2)
-    joint_index = [train_plain.bone_names.index(j) for j in model_plain.joints]
-    joint_index_cos = [train_cos.bone_names.index(j) for j in model_cos.joints]
     diffuse = np.asarray(core.sh.diffuse_operator(4))
-    plain_pred = model_sh(model_plain, unseen_plain, joint_index)
-    cos_pred = model_sh(model_cos, unseen_cos, joint_index_cos)
-    plain_true, cos_true = truth_sh(unseen_plain), truth_sh(unseen_cos)
+    plain_pred = model_sh(model_plain, unseen_plain)
+    cos_pred = model_sh(model_cos, unseen_cos)
+    plain_true, cos_true = baked_sh(unseen_plain), baked_sh(unseen_cos)
     convolved = plain_pred @ diffuse.T
     green = sh_errors(plain_pred, plain_true)
     red = sh_errors(cos_pred, cos_true)
@@ -327,10 +288,11 @@ def main():
 
     # Below-horizon rays: cast them vs count them as occluded.
     started = time.perf_counter()
-    cast_set, cast_seconds, cast_rays, _ = bake_frames(obj, TRAIN[:6], fig_rays, below_horizon="cast")
-    occl_set, occl_seconds, occl_rays, _ = bake_frames(obj, TRAIN[:6], fig_rays, below_horizon="occluded")
-    ao_cast = np.stack([core.visibility.ambient_occlusion(f) for f in truth_sh(cast_set)])
-    ao_occl = np.stack([core.visibility.ambient_occlusion(f) for f in truth_sh(occl_set)])
+    cast_set, cast_seconds, _, cast_job = bake_frames(obj, TRAIN[:6], fig_rays, below_horizon="cast")
+    occl_set, occl_seconds, _, occl_job = bake_frames(obj, TRAIN[:6], fig_rays, below_horizon="occluded")
+    cast_rays, occl_rays = cast_job.rays_cast, occl_job.rays_cast
+    ao_cast = np.stack([core.visibility.ambient_occlusion(f) for f in baked_sh(cast_set)])
+    ao_occl = np.stack([core.visibility.ambient_occlusion(f) for f in baked_sh(occl_set)])
     model_cast, rep_cast = core.visibility.fit_model(cast_set, influence, lobes=2, holdout_stride=0)
     model_occl, rep_occl = core.visibility.fit_model(occl_set, influence, lobes=2, holdout_stride=0)
     results["below_horizon"] = {

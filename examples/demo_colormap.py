@@ -41,7 +41,7 @@ def _scene(out_folder, settings):
         world.cycles.sampling_method = "NONE"
     scene.world = world
     scene.penumbra.colormap.output_folder = out_folder
-    colormap_scene.noise_ramp_plane(roughness=0.5)  # as bench/colormap_render.py
+    colormap_scene.noise_ramp_plane(roughness=0.5)  # as bench/blender_scripts/colormap_render.py
     return scene
 
 

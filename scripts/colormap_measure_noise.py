@@ -33,9 +33,8 @@ import bpy
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "addon"))
-sys.path.insert(0, os.path.join(ROOT, "addon", "penumbra", "colormap"))
-import interface  # noqa: E402  (the add-on's socket helper, no registration needed)
+sys.path[:0] = [ROOT, os.path.join(ROOT, "addon")]  # bench.helpers; the add-on's source (no registration needed)
+from bench.helpers.noise_points import noise_evaluator  # noqa: E402
 
 DETAILS = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0]
 ROUGHNESSES = [0.25, 0.5, 0.75, 1.0]
@@ -46,52 +45,7 @@ SEED = 20240611
 LOG2_ELONGATIONS = np.arange(0.0, 7.0)          # major/minor axis ratio 1 … 64
 
 
-def noise_evaluator():
-    """A mesh object whose geometry-nodes modifier stores Noise Texture Fac at
-    each vertex position; returns (object, group, noise node)."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    mesh = bpy.data.meshes.new("noise_points")
-    obj = bpy.data.objects.new("noise_points", mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    group = bpy.data.node_groups.new("measure noise", "GeometryNodeTree")
-    interface.add_socket(group, "Geometry", "INPUT", "NodeSocketGeometry")
-    interface.add_socket(group, "Geometry", "OUTPUT", "NodeSocketGeometry")
-    nodes, links = group.nodes, group.links
-    gin, gout = nodes.new("NodeGroupInput"), nodes.new("NodeGroupOutput")
-    position = nodes.new("GeometryNodeInputPosition")
-    noise = nodes.new("ShaderNodeTexNoise")
-    noise.noise_dimensions = "3D"
-    noise.inputs["Scale"].default_value = 1.0
-    noise.inputs["Distortion"].default_value = 0.0
-    store = nodes.new("GeometryNodeStoreNamedAttribute")
-    store.data_type = "FLOAT"
-    store.domain = "POINT"
-    store.inputs["Name"].default_value = "noise"
-    links.new(position.outputs["Position"], noise.inputs["Vector"])
-    links.new(gin.outputs[0], store.inputs["Geometry"])
-    value_input = [s for s in store.inputs if s.name == "Value" and s.type == "VALUE"]
-    links.new(noise.outputs["Fac"], value_input[0] if value_input else store.inputs["Value"])
-    links.new(store.outputs[0], gout.inputs[0])
-    modifier = obj.modifiers.new("noise", "NODES")
-    modifier.node_group = group
-    return obj, noise
-
-
-def evaluate(obj, points):
-    mesh = obj.data
-    mesh.clear_geometry()
-    mesh.vertices.add(len(points))
-    mesh.vertices.foreach_set("co", points.astype(np.float32).ravel())
-    mesh.update()
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-    evaluated = obj.evaluated_get(depsgraph)
-    data = evaluated.data.attributes["noise"].data
-    out = np.empty(len(data), np.float32)
-    data.foreach_get("value", out)
-    return out.astype(np.float64)
-
-
-def measure_octave(obj, noise, centres, unit_offsets, footprints):
+def measure_octave(evaluate, noise, centres, unit_offsets, footprints):
     """q[e][s]: within-footprint variance of one octave (Detail 0) over a
     Gaussian footprint with standard deviations (s·2^e, s), divided by the
     octave's total variance (pooled over footprints of s >= 4, whose samples
@@ -105,7 +59,7 @@ def measure_octave(obj, noise, centres, unit_offsets, footprints):
             p[:, :, 0] += s * 2.0 ** log2_e * unit_offsets[:, :, 0]
             p[:, :, 1] += s * unit_offsets[:, :, 1]
             points.append(p.reshape(-1, 3))
-    values = evaluate(obj, np.concatenate(points)).reshape(len(LOG2_ELONGATIONS), len(footprints), count, samples)
+    values = evaluate(np.concatenate(points)).reshape(len(LOG2_ELONGATIONS), len(footprints), count, samples)
     wide = values[0, footprints >= 4.0]
     total = float(wide.var())
     q = values.var(axis=3, ddof=1).mean(axis=2) / total
@@ -116,7 +70,11 @@ def measure_octave(obj, noise, centres, unit_offsets, footprints):
 
 def main():
     started = time.perf_counter()
-    obj, noise = noise_evaluator()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    noise, evaluate = noise_evaluator()
+    noise.noise_dimensions = "3D"
+    noise.inputs["Scale"].default_value = 1.0
+    noise.inputs["Distortion"].default_value = 0.0
     rng = np.random.default_rng(SEED)
     # The same footprints for every setting: centres spread over a large
     # region (away from the lattice's origin), Gaussian offsets in the plane.
@@ -135,7 +93,7 @@ def main():
         for roughness in ROUGHNESSES:
             noise.inputs["Detail"].default_value = detail
             noise.inputs["Roughness"].default_value = roughness
-            values = evaluate(obj, points)
+            values = evaluate(points)
             centre = values[:CENTRES]
             mu = float(values.mean())
             total = float(centre.std())
@@ -153,7 +111,7 @@ def main():
                                                  "min": float(values.min()), "max": float(values.max())}
             print(f"detail {detail:g} roughness {roughness:g}: mean {mu:.4f} std {total:.4f} "
                   f"sigma(s=1) {sigma[int(np.argmin(abs(LOG2_FOOTPRINTS)))]:.4f}", flush=True)
-    octave = measure_octave(obj, noise, centres, unit_offsets, footprints)
+    octave = measure_octave(evaluate, noise, centres, unit_offsets, footprints)
     version = f"{bpy.app.version[0]}.{bpy.app.version[1]}"
     path = os.path.join(ROOT, "addon", "penumbra", "colormap", "noise_statistics.json")
     data = json.load(open(path)) if os.path.exists(path) else {}

@@ -162,35 +162,40 @@ inline double phong20(double c) {
     return c16 * c4;
 }
 
+// The lobe's sum over the lights [first, last), `light(*it)` the light an
+// iterator names: brute force walks the rig itself, the culled version the
+// indices of one region.
+template <class It, class LightOf>
+Eigen::Vector3d glossy_sum(const Eigen::Vector3d& r, double cos_lobe, It first, It last, LightOf light) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (It k = first; k != last; ++k) {
+        const Light& l = light(*k);
+        const double c = r.dot(l.direction);
+        if (c >= cos_lobe) sum += phong20(c) * l.rgb;
+    }
+    return sum;
+}
+
 Eigen::MatrixXd glossy_brute(const std::vector<Light>& lights, const std::vector<Eigen::Vector3d>& dirs,
                              double cos_lobe) {
-    Eigen::MatrixXd e = Eigen::MatrixXd::Zero(Eigen::Index(dirs.size()), 3);
-    for (std::size_t i = 0; i < dirs.size(); ++i) {
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        for (const Light& l : lights) {
-            const double c = dirs[i].dot(l.direction);
-            if (c >= cos_lobe) sum += phong20(c) * l.rgb;
-        }
-        e.row(Eigen::Index(i)) = sum.transpose();
-    }
+    Eigen::MatrixXd e(Eigen::Index(dirs.size()), 3);
+    const auto itself = [](const Light& l) -> const Light& { return l; };
+    for (std::size_t i = 0; i < dirs.size(); ++i)
+        e.row(Eigen::Index(i)) = glossy_sum(dirs[i], cos_lobe, lights.begin(), lights.end(), itself).transpose();
     return e;
 }
 
 Eigen::MatrixXd glossy_culled(const AngularRegionTable& table, const std::vector<Light>& lights,
                               const std::vector<Eigen::Vector3d>& dirs, double cos_lobe,
                               std::size_t* visited) {
-    Eigen::MatrixXd e = Eigen::MatrixXd::Zero(Eigen::Index(dirs.size()), 3);
+    Eigen::MatrixXd e(Eigen::Index(dirs.size()), 3);
+    const auto indexed = [&lights](int k) -> const Light& { return lights[std::size_t(k)]; };
     std::size_t visits = 0;
     for (std::size_t i = 0; i < dirs.size(); ++i) {
         const int region = table.region_of(dirs[i]);
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        for (const int* k = table.begin(region); k != table.end(region); ++k) {
-            const Light& l = lights[*k];
-            const double c = dirs[i].dot(l.direction);
-            if (c >= cos_lobe) sum += phong20(c) * l.rgb;
-        }
+        e.row(Eigen::Index(i)) =
+            glossy_sum(dirs[i], cos_lobe, table.begin(region), table.end(region), indexed).transpose();
         visits += std::size_t(table.end(region) - table.begin(region));
-        e.row(Eigen::Index(i)) = sum.transpose();
     }
     if (visited) *visited = visits;
     return e;

@@ -6,7 +6,7 @@ plain ramp sparkles.
 
 `noise_ramp_plane()` with its defaults is the scene of examples/demo_colormap.py
 and the Blender tests; its keyword arguments (and `noise_ramp_torus`) make the
-variants bench/colormap_render.py measures (grazing view, Constant or HSV ramps,
+variants bench/blender_scripts/colormap_render.py measures (grazing view, Constant or HSV ramps,
 more noise detail, distortion, a curved object). `offset_noise` moves the noise
 pattern without moving anything else (the EEVEE sweep's "seeds")."""
 

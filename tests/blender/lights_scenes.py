@@ -1,54 +1,35 @@
-"""Maps, Worlds and rig snapshots shared by the light-rig tests."""
+"""Maps, Worlds and rig snapshots shared by the light-rig tests; the maps
+come from the test-video maker (bench/helpers/test_videos.py), whose
+`directions`, `solid_angles` and `write_map` the tests import from here."""
 
-import math
 import os
 
 import bpy
-import numpy as np
+
+from bench.helpers.test_videos import directions, solid_angles, sun_disc, write_map  # noqa: F401  (the tests' names)
 
 
-def _core():
+def core_module():
     from penumbra import native
     return native.require()
 
 
-def _ensure_nodes(id_block):
+def ensure_nodes(id_block):
     """The node tree of a material or world (Use Nodes is switched on before
     Blender 5.0, which made both always node-based; see penumbra/compat.py)."""
     from penumbra import compat
     return compat.ensure_nodes(id_block)
 
 
-def _write_map(path, image):
-    _core().image.write_exr(path, image.astype(np.float32), half=False, colorspace="Linear")
-    return path
+def sky_and_sun(h=64, w=128, sun=(0.4, -0.3, 0.8), radius=0.15, sun_radiance=40.0, sky=0.3):
+    """A bluish uniform sky and a sun disc (test_videos.sun_disc)."""
+    return sun_disc(h, w, sun, radius, sun_radiance, (sky, sky, 1.5 * sky))
 
 
-def _directions(h, w):
-    theta = (np.arange(h) + 0.5) / h * math.pi
-    phi = math.pi - 2 * math.pi * (np.arange(w) + 0.5) / w
-    t, p = np.meshgrid(theta, phi, indexing="ij")
-    return np.stack([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], axis=-1)
-
-
-def _solid_angles(h, w):
-    e = np.arange(h + 1) / h * math.pi
-    return (2 * math.pi / w) * (np.cos(e[:-1]) - np.cos(e[1:]))
-
-
-def _sky_and_sun(h=64, w=128, sun=(0.4, -0.3, 0.8), radius=0.15, sun_radiance=40.0, sky=0.3):
-    d = _directions(h, w)
-    s = np.asarray(sun) / np.linalg.norm(sun)
-    img = np.full((h, w, 3), sky, np.float32)
-    img[..., 2] *= 1.5  # a bluish sky
-    img[d @ s >= math.cos(radius)] = sun_radiance
-    return img
-
-
-def _world_with(scene, path, rotation_z=None):
+def world_with(scene, path, rotation_z=None):
     world = bpy.data.worlds.new("Test World")
     scene.world = world
-    nt = _ensure_nodes(world)
+    nt = ensure_nodes(world)
     env = nt.nodes.new("ShaderNodeTexEnvironment")
     env.image = bpy.data.images.load(path)
     nt.links.new(env.outputs["Color"], nt.nodes["Background"].inputs["Color"])
@@ -61,7 +42,7 @@ def _world_with(scene, path, rotation_z=None):
     return world
 
 
-def _rig_state(scene, json_path):
+def rig_state(scene, json_path):
     """Everything a failed rebuild must leave as it was."""
     from penumbra.lights.rig_objects import fcurve
     state = {kind: sorted(b.name for b in getattr(bpy.data, kind))

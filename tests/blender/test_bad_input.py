@@ -44,8 +44,8 @@ from penumbra.lights import operators as light_operators
 from penumbra.visibility import runtime
 
 from colormap_scenes import make_ramp_material, plane_with
-from lights_scenes import _rig_state, _sky_and_sun, _solid_angles, _world_with, _write_map
-from visibility_scenes import attribute, bake_op, character, uniform_world
+from lights_scenes import rig_state, sky_and_sun, solid_angles, world_with, write_map
+from visibility_character_scenes import attribute, bake_op, character, uniform_world
 
 
 # What a failed operator must leave as it was ---------------------------------------
@@ -432,7 +432,7 @@ def test_armature_deleted_after_the_bake_is_refused(addon, tmp_path, how):
 
 def _map_with_bad_pixels(h=32, w=64):
     """A sky-and-sun map with one NaN, one +Inf and one negative channel."""
-    img = _sky_and_sun(h=h, w=w)
+    img = sky_and_sun(h=h, w=w)
     img[3, 5, 0] = np.nan
     img[7, 9, 1] = np.inf
     img[11, 13, 2] = -4.0
@@ -451,7 +451,7 @@ def test_light_rig_from_a_map_with_nan_inf_and_negative_pixels(addon, tmp_path, 
     """The light tool zeroes such pixels and says how many (docs/lights.md):
     the rig is built from the rest of the map, with finite values."""
     img = _map_with_bad_pixels()
-    path = _write_map(str(tmp_path / "bad.exr"), img)
+    path = write_map(str(tmp_path / "bad.exr"), img)
     json_path = str(tmp_path / "rig.json")
     previous, before = undo_checkpoint()
     report = finished(bpy.ops.penumbra.build_light_rig, capfd, filepath=path, count=8, json_path=json_path)
@@ -460,7 +460,7 @@ def test_light_rig_from_a_map_with_nan_inf_and_negative_pixels(addon, tmp_path, 
     assert len(suns) == 8 and all(math.isfinite(o.data.energy) and o.data.energy >= 0 for o in suns)
     # The rig carries the map's light with those pixels at 0.
     clean = np.where(np.isfinite(img) & (img > 0), img, 0.0)
-    total = (clean * _solid_angles(*img.shape[:2])[:, None, None]).sum(axis=(0, 1))
+    total = (clean * solid_angles(*img.shape[:2])[:, None, None]).sum(axis=(0, 1))
     rgb = sum(np.array(l["rgb"]) for l in json.load(open(json_path))["frames"][0]["lights"])
     np.testing.assert_allclose(rgb, total, rtol=1e-4)
     assert_undo_works(before, scene_state())
@@ -472,7 +472,7 @@ def test_light_rig_from_a_map_of_zero_pixels_is_refused(addon, tmp_path, size):
     json_path = str(tmp_path / "rig.json")
     name = f"empty_{width}x{height}.hdr"
     path = _radiance_file(str(tmp_path / name), width, height)
-    _world_with(addon, path)  # the World's environment, as a user usually gives the map
+    world_with(addon, path)  # the World's environment, as a user usually gives the map
     previous, before = undo_checkpoint()
     words = (name, f"{width}x{height}", "at least 1x1", "check that the file is complete")
     refused(bpy.ops.penumbra.build_light_rig, *words, filepath=path, count=4, json_path=json_path)
@@ -504,7 +504,7 @@ def test_light_rig_from_a_one_pixel_map(addon, tmp_path, capfd):
 
 
 def _environment_world(scene, path):
-    world = _world_with(scene, path)
+    world = world_with(scene, path)
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 1.0
     return world
 
@@ -515,10 +515,10 @@ def test_visibility_under_a_map_with_nan_inf_and_negative_pixels(addon, tmp_path
     obj, rig = baked_character(tmp_path)
     img = _map_with_bad_pixels()
     clean = np.where(np.isfinite(img), img, 0.0)
-    _environment_world(addon, _write_map(str(tmp_path / "clean.exr"), clean))
+    _environment_world(addon, write_map(str(tmp_path / "clean.exr"), clean))
     assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
     expected = attribute(obj, "penumbra_shading", 4).copy()
-    _environment_world(addon, _write_map(str(tmp_path / "bad.exr"), img))
+    _environment_world(addon, write_map(str(tmp_path / "bad.exr"), img))
     previous, before = undo_checkpoint()
     report = finished(bpy.ops.penumbra.apply_visibility, capfd)
     assert "2 NaN or infinite pixel(s), lit as black" in report, report
@@ -613,7 +613,7 @@ def _noisy_sequence(folder, frames, seed):
     core = native.require()
     folder.mkdir()
     rng = np.random.default_rng(seed)
-    img = _sky_and_sun(h=32, w=64, sky=0.05)
+    img = sky_and_sun(h=32, w=64, sky=0.05)
     for i in range(frames):
         frame = core.lights.rotate_map_z(img, math.radians(10 * i)) + rng.uniform(0, 0.01, img.shape)
         core.image.write_exr(str(folder / f"sky_{i + 1:04d}.exr"), frame.astype(np.float32), half=False,
@@ -632,7 +632,7 @@ def test_truncated_exr_in_a_sequence_leaves_the_rig_and_json_as_they_were(addon,
     assert len(data) > 10000
     cut.write_bytes(data[: len(data) * 3 // 4])
     previous, before = undo_checkpoint()
-    rig_before = _rig_state(addon, json_path)
+    rig_before = rig_state(addon, json_path)
     json_before = open(json_path, "rb").read()
     words = ("sky_0003.exr", "truncated", "re-export")
     if run == "script":
@@ -644,7 +644,7 @@ def test_truncated_exr_in_a_sequence_leaves_the_rig_and_json_as_they_were(addon,
         message = errors_of(op)
         for word in words:
             assert word in message, message
-    assert _rig_state(addon, json_path) == rig_before
+    assert rig_state(addon, json_path) == rig_before
     assert open(json_path, "rb").read() == json_before and not os.path.exists(json_path + ".tmp")
     assert scene_state() == before
     assert_undo_works(previous, before)

@@ -16,7 +16,6 @@ import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
 
 
 def package():
@@ -28,7 +27,7 @@ def package():
 
 @pytest.fixture(scope="module")
 def installed_run(tmp_path_factory):
-    import lights_make_test_videos as videos  # fixture data only: made with the build tree's module
+    from bench.helpers import test_videos as videos  # fixture data only: made with the build tree's module
     tmp = tmp_path_factory.mktemp("install")
     video = videos.write_video(str(tmp / "sky.mov"), videos.rotation_frames(videos.sky(32, 64), 4, 5.0), fps=24)
     user = tmp / "user"

@@ -14,8 +14,8 @@ import pytest
 from penumbra import native
 
 from colormap_scenes import make_ramp_material, plane_with
-from lights_scenes import _sky_and_sun, _write_map
-from visibility_scenes import bake_op, character, uniform_world
+from lights_scenes import sky_and_sun, write_map
+from visibility_character_scenes import bake_op, character, uniform_world
 
 KINDS = ["runtime_error", "bad_alloc"]
 
@@ -61,7 +61,7 @@ def test_apply_visibility(addon, tmp_path, stage):
 
 @pytest.mark.parametrize("kind", KINDS)
 def test_build_light_rig(addon, tmp_path, kind):
-    path = _write_map(str(tmp_path / "sky.exr"), _sky_and_sun(h=32, w=64))
+    path = write_map(str(tmp_path / "sky.exr"), sky_and_sun(h=32, w=64))
     json_path = str(tmp_path / "rig.json")
     objects_before = len(bpy.data.objects)
     fails_then_runs("lights", kind,

@@ -24,7 +24,7 @@ from penumbra import compat, native, world
 from penumbra.colormap import interface
 from penumbra.visibility import scene_data
 
-from lights_scenes import _directions, _sky_and_sun, _solid_angles, _write_map
+from lights_scenes import directions, sky_and_sun, solid_angles, write_map
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
 SUN = np.array([0.4, -0.3, 0.8]) / np.linalg.norm([0.4, -0.3, 0.8])
@@ -131,7 +131,7 @@ def _rotated_map(pixels, lookup):
     """P(d) = E(lookup·d), nearest pixel, by the latlong convention of
     core/common/latlong.hpp written out here in numpy."""
     h, w = pixels.shape[:2]
-    m = _directions(h, w) @ np.asarray(lookup).T
+    m = directions(h, w) @ np.asarray(lookup).T
     col = np.floor(w * (0.5 - np.arctan2(m[..., 1], m[..., 0]) / (2 * math.pi))).astype(int) % w
     row = np.clip(np.floor(h * np.arccos(np.clip(m[..., 2], -1, 1)) / math.pi).astype(int), 0, h - 1)
     return pixels[row, col]
@@ -144,8 +144,8 @@ def test_the_connected_environment_wins_over_an_unconnected_one(addon, tmp_path)
     w, tree = _new_world(scene)
     # The unconnected one comes first in the tree: a reader that takes the first
     # Environment Texture it finds gets it.
-    stray = _environment(tree, _image(str(tmp_path / "stray.exr"), _sky_and_sun(sun=SUN)), link=False)
-    wired = _environment(tree, _image(str(tmp_path / "wired.exr"), _sky_and_sun(sun=OTHER_SUN)))
+    stray = _environment(tree, _image(str(tmp_path / "stray.exr"), sky_and_sun(sun=SUN)), link=False)
+    wired = _environment(tree, _image(str(tmp_path / "wired.exr"), sky_and_sun(sun=OTHER_SUN)))
     assert tree.nodes[:].index(stray) < tree.nodes[:].index(wired)
     reading = world.read_scene(scene)
     assert reading.kind == "environment" and reading.supported and reading.image.name == "wired.exr"
@@ -164,7 +164,7 @@ def test_the_connected_environment_wins_over_an_unconnected_one(addon, tmp_path)
 
 def test_an_environment_inside_nested_node_groups_behind_a_reroute_is_read(addon, tmp_path):
     scene = addon
-    pixels = _sky_and_sun(sun=SUN)
+    pixels = sky_and_sun(sun=SUN)
     rotation = (0.0, 0.0, math.radians(90))
     _map_world(scene, str(tmp_path / "flat.exr"), pixels, rotation)
     flat_sh = _sh(scene)
@@ -210,13 +210,13 @@ def test_the_active_world_output_for_the_render_engine_is_read(addon, tmp_path):
     scene = addon
     w, tree = _new_world(scene)
     tree.nodes["World Output"].target = "CYCLES"
-    _environment(tree, _image(str(tmp_path / "cycles.exr"), _sky_and_sun(sun=SUN)))
+    _environment(tree, _image(str(tmp_path / "cycles.exr"), sky_and_sun(sun=SUN)))
     eevee_output = tree.nodes.new("ShaderNodeOutputWorld")
     eevee_output.target = "EEVEE"
     background = tree.nodes.new("ShaderNodeBackground")
     tree.links.new(background.outputs[0], eevee_output.inputs["Surface"])
     env = tree.nodes.new("ShaderNodeTexEnvironment")
-    env.image = _image(str(tmp_path / "eevee.exr"), _sky_and_sun(sun=OTHER_SUN))
+    env.image = _image(str(tmp_path / "eevee.exr"), sky_and_sun(sun=OTHER_SUN))
     tree.links.new(env.outputs["Color"], background.inputs["Color"])
     scene.render.engine = "CYCLES"
     assert world.read_scene(scene).image.name == "cycles.exr"
@@ -242,7 +242,7 @@ def test_a_mapping_z_rotation_equals_the_map_pre_rotated(addon, tmp_path, vector
     (TEXTURE: the inverse). The pre-rotated map is made in numpy by the latlong
     convention (u = 0.5 − φ/2π), with no Mapping node."""
     scene = addon
-    pixels = _sky_and_sun(sun=SUN, sky=0.05)
+    pixels = sky_and_sun(sun=SUN, sky=0.05)
     pre_rotated = np.roll(pixels, roll * pixels.shape[1] // 4, axis=1)
     _map_world(scene, str(tmp_path / "plain.exr"), pixels)
     plain_sh = _sh(scene)
@@ -265,7 +265,7 @@ def test_a_mapping_z_rotation_equals_the_map_pre_rotated(addon, tmp_path, vector
 @pytest.mark.parametrize("invert", [False, True])
 def test_a_vector_rotate_about_z_equals_the_map_pre_rotated(addon, tmp_path, invert):
     scene = addon
-    pixels = _sky_and_sun(sun=SUN, sky=0.05)
+    pixels = sky_and_sun(sun=SUN, sky=0.05)
     _map_world(scene, str(tmp_path / "pre.exr"), np.roll(pixels, (-1 if invert else 1) * 32, axis=1))
     expected = _sh(scene)
     w, tree = _new_world(scene)
@@ -285,7 +285,7 @@ def test_a_full_euler_rotation_equals_the_map_resampled(addon, tmp_path, vector_
     matrix Cycles builds) applied to a smooth map by resampling it in numpy."""
     scene = addon
     h, w = 128, 256
-    d = _directions(h, w)
+    d = directions(h, w)
     pixels = (0.1 + 3.0 * np.clip(d @ SUN, 0, None)[..., None] ** 4 * np.array([1.0, 0.8, 0.5])
               + 0.3 * np.clip(d @ OTHER_SUN, 0, None)[..., None] ** 2 * np.array([0.2, 0.4, 1.0]))
     euler = (math.radians(30), math.radians(-20), math.radians(75))
@@ -307,7 +307,7 @@ def test_a_location_and_scale_are_read_and_what_no_reader_can_take_is_reported(a
     projects the resampled term), so it is no problem; what neither can
     represent is a problem for both, naming the node and the input."""
     scene = addon
-    w = _map_world(scene, str(tmp_path / "map.exr"), _sky_and_sun(), (0.0, 0.0, 0.5))
+    w = _map_world(scene, str(tmp_path / "map.exr"), sky_and_sun(), (0.0, 0.0, 0.5))
     tree = w.node_tree
     mapping = tree.nodes["Mapping"]
     mapping.inputs["Location"].default_value = (0.5, 0.0, 0.0)
@@ -371,13 +371,13 @@ def _panorama(scene, tmp_path, name, h, w, samples=16):
 
 def _relative_error(got, expected):
     """‖got − expected‖ / ‖expected‖ over the sphere (each pixel by its solid angle)."""
-    omega = _solid_angles(*expected.shape[:2])[:, None, None]
+    omega = solid_angles(*expected.shape[:2])[:, None, None]
     return math.sqrt((omega * (got - expected) ** 2).sum() / (omega * expected ** 2).sum())
 
 
 def _smooth_map(h=64, w=128):
     """A map without edges, so that a render's samples and the grid's agree."""
-    d = _directions(h, w)
+    d = directions(h, w)
     return (0.1 + 2.0 * np.clip(d @ SUN, 0, None)[..., None] ** 3 * np.array([1.0, 0.8, 0.5])
             + 0.2 * (0.5 + 0.5 * d)).astype(np.float32)
 
@@ -462,13 +462,13 @@ def _remapped_light(pixels, remap):
     nearest pixels by the latlong convention, on a 4× finer grid, in numpy.
     Returns (its flux-weighted mean direction, ∫ L dω per channel)."""
     h, w = pixels.shape[0] * 4, pixels.shape[1] * 4
-    d = _directions(h, w)
+    d = directions(h, w)
     m = remap(d)
     m = m / np.linalg.norm(m, axis=-1, keepdims=True)
     ph, pw = pixels.shape[:2]
     col = np.floor(pw * (0.5 - np.arctan2(m[..., 1], m[..., 0]) / (2 * math.pi))).astype(int) % pw
     row = np.clip(np.floor(ph * np.arccos(np.clip(m[..., 2], -1, 1)) / math.pi).astype(int), 0, ph - 1)
-    flux = pixels[row, col] * _solid_angles(h, w)[:, None, None]
+    flux = pixels[row, col] * solid_angles(h, w)[:, None, None]
     return ((flux @ LUMINANCE)[..., None] * d).sum(axis=(0, 1)), flux.sum(axis=(0, 1))
 
 
@@ -479,7 +479,7 @@ def test_a_mapping_location_puts_the_sun_where_the_lookup_sees_it(addon, tmp_pat
     is the remapped World's ∫ L dω (a Location changes the solid angle the
     sun covers)."""
     scene = addon
-    pixels = _sky_and_sun(sun=SUN, sky=0.0)
+    pixels = sky_and_sun(sun=SUN, sky=0.0)
     t = np.array([0.5, 0.2, -0.3])
     w = _map_world(scene, str(tmp_path / "map.exr"), pixels, (0.0, 0.0, 0.0))
     w.node_tree.nodes["Mapping"].inputs["Location"].default_value = t
@@ -491,7 +491,7 @@ def test_a_mapping_location_puts_the_sun_where_the_lookup_sees_it(addon, tmp_pat
     moment, total = _remapped_light(pixels, lambda d: d + t)
     assert _angle(_rig_moment(directions, rgb), moment) < 1.0
     np.testing.assert_allclose(rgb.sum(axis=0), total, rtol=0.02)
-    assert abs(rgb.sum() / (pixels * _solid_angles(64, 128)[:, None, None]).sum() - 1.0) > 0.1
+    assert abs(rgb.sum() / (pixels * solid_angles(64, 128)[:, None, None]).sum() - 1.0) > 0.1
 
 
 def test_a_uniform_scale_changes_nothing_and_others_bend_or_mirror_the_map(addon, tmp_path):
@@ -499,7 +499,7 @@ def test_a_uniform_scale_changes_nothing_and_others_bend_or_mirror_the_map(addon
     rig for rig; (1, 1, 3) sees the sun at normalize(s_x, s_y, s_z/3), lower;
     (−1, 1, 1) mirrors it to (−s_x, s_y, s_z)."""
     scene = addon
-    pixels = _sky_and_sun(sun=SUN, sky=0.0)
+    pixels = sky_and_sun(sun=SUN, sky=0.0)
     w = _map_world(scene, str(tmp_path / "map.exr"), pixels, (0.0, 0.0, 0.0))
     plain = _rig(scene, tmp_path, name="plain.json")
     scale = w.node_tree.nodes["Mapping"].inputs["Scale"]
@@ -526,9 +526,9 @@ def test_a_remapped_world_image_that_is_a_sequence_or_packed_gives_every_frame(a
     scene = addon
     folder = tmp_path / "seq"
     folder.mkdir()
-    pixels = _sky_and_sun(sun=SUN, sky=0.05)
+    pixels = sky_and_sun(sun=SUN, sky=0.05)
     for i in range(3):
-        _write_map(str(folder / f"sky_{i + 1:04d}.exr"), (i + 1) * pixels)
+        write_map(str(folder / f"sky_{i + 1:04d}.exr"), (i + 1) * pixels)
     w, tree = _new_world(scene)
     env = _environment(tree, bpy.data.images.load(str(folder / "sky_0001.exr")))
     _mapping(tree, env, (0.0, 0.0, 0.0)).inputs["Location"].default_value = (0.0, 0.3, 0.4)
@@ -570,11 +570,11 @@ def test_a_background_mixed_with_a_constant_colour_lights_as_their_weighted_sum(
     0.3 (an Add Shader 1 and 1): the image at strength 2 plus a colour at
     strength 1.5 light as that sum, made in numpy and built from a file."""
     scene = addon
-    pixels = _sky_and_sun(sun=SUN, sky=0.05)
+    pixels = sky_and_sun(sun=SUN, sky=0.05)
     colour = np.array([0.2, 0.3, 0.5])
     summed = shares[0] * 2.0 * pixels + shares[1] * 1.5 * colour
     json_path = str(tmp_path / "file.json")
-    assert bpy.ops.penumbra.build_light_rig(filepath=_write_map(str(tmp_path / "summed.exr"), summed), count=16,
+    assert bpy.ops.penumbra.build_light_rig(filepath=write_map(str(tmp_path / "summed.exr"), summed), count=16,
                                             json_path=json_path, fit_irradiance=False) == {"FINISHED"}
     lights = json.load(open(json_path))["frames"][0]["lights"]
     from_file = np.array([l["direction"] for l in lights]), np.array([l["rgb"] for l in lights])
@@ -587,7 +587,7 @@ def test_a_background_mixed_with_a_constant_colour_lights_as_their_weighted_sum(
     reading = world.read_scene(scene)
     assert reading.supported and [t.weight for t in reading.terms] == pytest.approx(shares)
     directions, rgb = _rig(scene, tmp_path, count=16)
-    total = (summed * _solid_angles(*pixels.shape[:2])[:, None, None]).sum(axis=(0, 1))
+    total = (summed * solid_angles(*pixels.shape[:2])[:, None, None]).sum(axis=(0, 1))
     np.testing.assert_allclose(rgb.sum(axis=0), total, rtol=3e-3)
     np.testing.assert_allclose(from_file[1].sum(axis=0), total, rtol=1e-4)
     assert _angle(_rig_moment(directions, rgb), _rig_moment(*from_file)) < 1.0
@@ -630,7 +630,7 @@ def test_is_camera_ray_lights_with_one_background_and_shows_the_camera_the_other
     of a plane lit by this World is the render of the plane lit by the rig,
     not the white's 0.8·5."""
     scene = addon
-    pixels = _sky_and_sun(sun=SUN, sky=0.2, radius=0.2, sun_radiance=20.0)
+    pixels = sky_and_sun(sun=SUN, sky=0.2, radius=0.2, sun_radiance=20.0)
     w, tree = _new_world(scene, "Camera Trick")
     _environment(tree, _image(str(tmp_path / "map.exr"), pixels))
     white = _constant_background(tree, (1.0, 1.0, 1.0), 5.0)
@@ -714,7 +714,7 @@ def test_a_non_linear_image_is_converted_to_scene_linear_by_both_tools(addon, tm
     w_, tree = _new_world(scene)
     _environment(tree, image)
     linear = _srgb_to_linear(encoded)
-    total = (linear * _solid_angles(h, w)[:, None, None]).sum(axis=(0, 1))  # ∫ L dω per channel
+    total = (linear * solid_angles(h, w)[:, None, None]).sum(axis=(0, 1))  # ∫ L dω per channel
     # Visibility: the SH lighting's constant term is ∫ L dω / √(4π).
     np.testing.assert_allclose(_sh(scene)[0] * math.sqrt(4 * math.pi), total, rtol=2e-3)
     np.testing.assert_allclose(world.image_pixels(image), linear, rtol=2e-3, atol=1e-4)
@@ -725,7 +725,7 @@ def test_a_non_linear_image_is_converted_to_scene_linear_by_both_tools(addon, tm
                                rtol=2e-3)
     # Non-Color data is not converted.
     image.colorspace_settings.name = "Non-Color"
-    raw = (encoded * _solid_angles(h, w)[:, None, None]).sum(axis=(0, 1))
+    raw = (encoded * solid_angles(h, w)[:, None, None]).sum(axis=(0, 1))
     np.testing.assert_allclose(_sh(scene)[0] * math.sqrt(4 * math.pi), raw, rtol=2e-3)
 
 
@@ -775,7 +775,7 @@ def test_a_world_with_no_nodes_no_output_or_no_image_says_what_to_do(addon, tmp_
     assert reading.kind == "uniform" and f"the Environment Texture '{env.name}' has no image" in reading.note
     _refused(scene, tmp_path, "has no image: open an image in it")
     # An image whose file is gone: the visibility shading says which file.
-    env.image = _image(str(tmp_path / "gone.exr"), _sky_and_sun())
+    env.image = _image(str(tmp_path / "gone.exr"), sky_and_sun())
     os.remove(tmp_path / "gone.exr")
     env.image.reload()
     with pytest.raises(world.WorldError, match="gone.exr' is missing; point the image at an existing file"):
@@ -788,7 +788,7 @@ def test_the_visibility_lighting_and_the_light_rig_see_the_same_light(addon, tmp
     """Through world.py both tools read the same map, rotation and strength:
     the SH lighting's mean direction is the rig's, and its total light the rig's."""
     scene = addon
-    pixels = _sky_and_sun(sun=SUN, sky=0.2)
+    pixels = sky_and_sun(sun=SUN, sky=0.2)
     w = _map_world(scene, str(tmp_path / "map.exr"), pixels,
                    (math.radians(20), math.radians(-35), math.radians(110)))
     tree = w.node_tree
@@ -801,7 +801,7 @@ def test_the_visibility_lighting_and_the_light_rig_see_the_same_light(addon, tmp
     directions, rgb = _rig(scene, tmp_path, count=32)
     assert _angle(_sh_moment(lighting), _rig_moment(directions, rgb)) < 2.0
     np.testing.assert_allclose(lighting[0] * math.sqrt(4 * math.pi), rgb.sum(axis=0), rtol=1e-3)
-    total = 2.0 * (pixels * _solid_angles(*pixels.shape[:2])[:, None, None]).sum(axis=(0, 1))
+    total = 2.0 * (pixels * solid_angles(*pixels.shape[:2])[:, None, None]).sum(axis=(0, 1))
     np.testing.assert_allclose(rgb.sum(axis=0), total, rtol=1e-4)
     # Where the sun is seen: the map's sun turned by world_from_map.
     seen = np.array(mathutils.Euler((math.radians(20), math.radians(-35), math.radians(110)),

@@ -13,5 +13,7 @@ BLENDER_WORLDS = "/usr/share/blender/datafiles/studiolights/world"
 
 if ADDON_DIR not in sys.path:
     sys.path.insert(0, ADDON_DIR)
+if ROOT not in sys.path:
+    sys.path.append(ROOT)  # bench.helpers: what the tests share with the benchmarks
 # Videos are decoded by the ffmpeg the package ships (the build links it here).
 os.environ.setdefault("PENUMBRA_FFMPEG", os.path.join(ADDON_DIR, "bin", "ffmpeg"))

@@ -4,8 +4,6 @@ runs the same operation again to the same result. The failure is injected
 through _penumbra.testing; the core's one parallel helper (common/parallel.hpp)
 carries it to the caller."""
 
-import os
-import sys
 import threading
 import time
 
@@ -13,10 +11,9 @@ import numpy as np
 import pytest
 
 import _penumbra as p
-from visibility_scenes import bake, two_sphere_character
+from visibility_sphere_scenes import bake, two_sphere_character
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "scripts"))
-import lights_make_test_videos as videos  # noqa: E402
+from bench.helpers import test_videos as videos
 
 
 def lights_region_powers():

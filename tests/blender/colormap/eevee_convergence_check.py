@@ -3,7 +3,7 @@
     xvfb-run -a blender -b --factory-startup --python eevee_convergence_check.py
 
 run by tests/python/colormap/test_eevee_convergence_in_blender.py. Prints one
-line "RESULT {json}". On the benchmark plane (bench/colormap_render.py's
+line "RESULT {json}". On the benchmark plane (bench/blender_scripts/colormap_render.py's
 scene "plane", 64×36):
   - lookup: the Filtered Ramp fed the raw noise and σ = 0 against the plain
     ramp, both at one sample (the same shading points): what is left is the
@@ -17,16 +17,16 @@ import os
 import sys
 import traceback
 
-os.environ.setdefault("GALLIVM_PERF", "nopt")   # see bench/colormap_eevee_render.py
+os.environ.setdefault("GALLIVM_PERF", "nopt")   # see bench/blender_scripts/colormap_eevee_render.py
 os.environ.setdefault("LP_NUM_THREADS", "2")
 
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-sys.path.insert(0, os.path.join(ROOT, "bench"))
-import colormap_eevee_render as eevee_bench  # noqa: E402
-import colormap_render as harness  # noqa: E402
+sys.path.insert(0, ROOT)  # bench.blender_scripts
+from bench.blender_scripts import colormap_eevee_render as eevee_bench  # noqa: E402
+from bench.blender_scripts import colormap_render as harness  # noqa: E402
 
 SIZE = (64, 36)
 REFERENCE_SAMPLES = 512

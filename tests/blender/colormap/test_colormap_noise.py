@@ -14,38 +14,9 @@ from penumbra import native
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))), "examples", "scenes"))
 import colormap_scene  # noqa: E402  (the scene users can copy, examples/scenes/colormap_scene.py)
-from penumbra.colormap import interface, node_groups
+from penumbra.colormap import node_groups
 
-def _noise_evaluator():
-    """Blender's own Noise Texture at given points, through geometry nodes."""
-    mesh = bpy.data.meshes.new("noise_points")
-    obj = bpy.data.objects.new("noise_points", mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    group = bpy.data.node_groups.new("noise at points", "GeometryNodeTree")
-    interface.add_socket(group, "Geometry", "INPUT", "NodeSocketGeometry")
-    interface.add_socket(group, "Geometry", "OUTPUT", "NodeSocketGeometry")
-    gin, gout = group.nodes.new("NodeGroupInput"), group.nodes.new("NodeGroupOutput")
-    noise = group.nodes.new("ShaderNodeTexNoise")
-    store = group.nodes.new("GeometryNodeStoreNamedAttribute")
-    store.data_type, store.domain = "FLOAT", "POINT"
-    store.inputs["Name"].default_value = "noise"
-    group.links.new(group.nodes.new("GeometryNodeInputPosition").outputs[0], noise.inputs["Vector"])
-    group.links.new(gin.outputs[0], store.inputs["Geometry"])
-    value = [s for s in store.inputs if s.name == "Value" and s.type == "VALUE"]
-    group.links.new(noise.outputs["Fac"], value[0] if value else store.inputs["Value"])
-    group.links.new(store.outputs[0], gout.inputs[0])
-    obj.modifiers.new("noise", "NODES").node_group = group
-
-    def evaluate(points):
-        mesh.clear_geometry()
-        mesh.vertices.add(len(points))
-        mesh.vertices.foreach_set("co", points.astype(np.float32).ravel())
-        mesh.update()
-        data = obj.evaluated_get(bpy.context.evaluated_depsgraph_get()).data.attributes["noise"].data
-        out = np.empty(len(data), np.float32)
-        data.foreach_get("value", out)
-        return out
-    return noise, evaluate
+from bench.helpers.noise_points import noise_evaluator  # noqa: E402
 
 
 @pytest.mark.parametrize("detail, roughness", [(4.0, 0.5), (2.6, 0.8), (0.3, 0.5), (6.0, 1.0)])
@@ -53,7 +24,7 @@ def test_octave_weights_rebuild_blenders_noise(addon, detail, roughness):
     """The octave filter rebuilds the noise as Σ w_i · Noise(Detail 0,
     Scale·2^i): checked against Blender's own multi-octave Noise Texture."""
     from penumbra.colormap import noise_statistics
-    noise, evaluate = _noise_evaluator()
+    noise, evaluate = noise_evaluator()
     points = np.random.default_rng(3).uniform(-40, 40, (500, 3))
     noise.inputs["Scale"].default_value = 1.7
     noise.inputs["Detail"].default_value = detail

@@ -62,11 +62,11 @@ def scene(addon):
 @pytest.fixture(scope="module")
 def sequence(tmp_path_factory, addon):
     """FRAMES equirectangular EXRs of a sky and a sun that turns 5° a frame."""
-    from lights_scenes import _core, _sky_and_sun
+    from lights_scenes import core_module, sky_and_sun
 
     folder = tmp_path_factory.mktemp("sky")
-    core = on_main(_core)
-    sky = _sky_and_sun(h=32, w=64, sky=0.05)
+    core = on_main(core_module)
+    sky = sky_and_sun(h=32, w=64, sky=0.05)
     for i in range(FRAMES):
         core.image.write_exr(str(folder / f"sky_{i + 1:04d}.exr"), core.lights.rotate_map_z(sky, math.radians(5 * i)),
                              half=False, colorspace="Linear")

@@ -22,7 +22,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.a
 sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
 import visibility_character  # noqa: E402
 
-from visibility_scenes import attribute, bake_op, character, uniform_world  # noqa: E402
+from visibility_character_scenes import attribute, bake_op, character, uniform_world  # noqa: E402
 
 # Held-out error allowed (mean |Δ AO| over vertices and held-out frames); see
 # docs/visibility.md ("Accuracy threshold"). An absolute ceiling only: a

@@ -1,21 +1,19 @@
 """The light-rig bindings: lights of synthetic maps against closed forms and
 a numpy reference, bad input, sequences and videos made by
-scripts/lights_make_test_videos.py."""
+bench/helpers/test_videos.py."""
 
 import math
 import os
 import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 import _penumbra
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-sys.path.insert(0, os.path.join(ROOT, "scripts"))
-import lights_make_test_videos as videos  # noqa: E402
-from lights_median_cut import median_cut, median_cut_suns  # noqa: E402
+from bench.helpers import test_videos as videos
+from bench.helpers.median_cut import median_cut, median_cut_suns
+from bench.helpers.metrics import rel_rmse
 
 from conftest import BLENDER_OCIO  # noqa: E402
 
@@ -30,14 +28,12 @@ def numpy_irradiance(image, normals):
 
 
 def relative_irradiance_error(directions, rgb, normals, reference):
-    y = np.array([0.2126, 0.7152, 0.0722])
-    e = _penumbra.lights.irradiance(directions, rgb, normals)
-    return math.sqrt((((e - reference) @ y) ** 2).sum() / ((reference @ y) ** 2).sum())
+    return rel_rmse(_penumbra.lights.irradiance(directions, rgb, normals), reference)
 
 
 def test_region_lights_are_within_1_2x_median_cut_irradiance_error_of_a_bundled_world():
     """Against a numpy reference over 300 normals, with Debevec's median cut
-    (scripts/lights_median_cut.py) on the same map in the same test as the
+    (bench/helpers/median_cut.py) on the same map in the same test as the
     bar: Penumbra measures 0.5–0.7 %, the paper's method scores ~5 %, so a
     fixed 5 % could not catch a regression."""
     image = videos.load_world("forest", 256)
@@ -63,11 +59,9 @@ def test_the_fitted_rig_has_at_most_half_median_cuts_irradiance_error_drawn_as_s
     image = np.maximum(videos.load_world("sunrise", 256), 0)
     normals = _penumbra.sh.fibonacci_directions(300)
     reference = numpy_irradiance(image, normals)
-    y = np.array([0.2126, 0.7152, 0.0722])
 
     def error(d, rgb, spread):
-        e = _penumbra.lights.irradiance(d, rgb, normals, spread=spread, sun_model=sun_model)
-        return math.sqrt((((e - reference) @ y) ** 2).sum() / ((reference @ y) ** 2).sum())
+        return rel_rmse(_penumbra.lights.irradiance(d, rgb, normals, spread=spread, sun_model=sun_model), reference)
 
     fitted = _penumbra.lights.frame_lights(image, count=16, fit_irradiance=True, sun_model=sun_model)
     np.testing.assert_allclose(fitted["rgb"].sum(axis=0), fitted["total_rgb"], rtol=1e-12)

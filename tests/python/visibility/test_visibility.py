@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import _penumbra as p
-from visibility_scenes import bake, rot_z, two_sphere_character
+from visibility_sphere_scenes import bake, rot_z, two_sphere_character
 
 
 def test_far_side_of_the_body_sees_its_whole_upper_hemisphere():

@@ -1,6 +1,6 @@
 """Cycles' own AO bake of a mesh, the baseline the visibility benchmarks
-measure the baker against (shared by visibility_benchmark.py and
-visibility_humanoid_benchmark.py)."""
+(bench/visibility_benchmark.py, bench/visibility_humanoid_benchmark.py)
+measure the baker against."""
 
 import time
 

@@ -1,14 +1,13 @@
 """Debevec's median-cut light-probe sampling (2005) in numpy: the baseline the
-light rig is measured against, by bench/lights_benchmark.py and by
-tests/python/test_lights.py in the same run. Not part of the add-on."""
+light rig is measured against, by the light-rig benchmarks and by
+tests/python/lights/test_lights.py in the same run. Not part of the add-on."""
 
 import math
 
 import numpy as np
 
-import lights_make_test_videos as data
-
-Y = np.array([0.2126, 0.7152, 0.0722])
+from bench.helpers import test_videos as data
+from bench.helpers.metrics import LUMINANCE
 
 
 def median_cut(image, n):
@@ -27,7 +26,7 @@ def median_cut_suns(image, n):
     h, w = image.shape[:2]
     omega = data.solid_angles(h, w)[:, None]
     flux = image * omega[..., None]                      # L·Ω per pixel
-    lum = flux @ Y
+    lum = flux @ LUMINANCE
     sat = np.zeros((h + 1, w + 1))
     sat[1:, 1:] = lum.cumsum(0).cumsum(1)
 

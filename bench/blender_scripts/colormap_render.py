@@ -1,8 +1,8 @@
 """Sample-count sweep of the colour-map filter (issue #12), Cycles part, and the
-harness bench/colormap_eevee_render.py shares. Run by colormap_benchmark.py:
+harness bench/blender_scripts/colormap_eevee_render.py shares. Run by colormap_benchmark.py:
 
-    .venv/bin/python bench/colormap_render.py -- OUT           (bpy module)
-    blender -b --factory-startup --python bench/colormap_render.py -- OUT
+    .venv/bin/python bench/blender_scripts/colormap_render.py -- OUT           (bpy module)
+    blender -b --factory-startup --python bench/blender_scripts/colormap_render.py -- OUT
 
 For every scene in SCENES the plain ColorRamp and Penumbra's filtered ramp are
 rendered at each sample count and seed and compared (RMSE over RGB) with a
@@ -41,12 +41,14 @@ import time
 import bpy
 import numpy as np
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "build", "addon"))
-sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))  # bench.helpers
+from bench.helpers.paths import use_addon  # noqa: E402
+
+use_addon()
 import colormap_scene  # noqa: E402
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
+from bench.helpers.log import log  # noqa: E402  (colormap_benchmark.py echoes these lines)
 
 HARNESS_VERSION = 2          # bump when a change here changes what an entry means
 BASE_SIZE = (192, 108)
@@ -294,10 +296,6 @@ def interior_mask(reference, margin=SILHOUETTE_MARGIN):
         for dx in range(2 * margin + 1):
             interior &= padded[dy:dy + covered.shape[0], dx:dx + covered.shape[1]]
     return interior
-
-
-def log(*args):
-    print("colormap sweep:", *args, flush=True)
 
 
 # ---- the sweep ------------------------------------------------------------

@@ -1,6 +1,6 @@
-"""What the benchmark scripts share: replacing their section of a page in
-docs/ (written to a temporary name, then renamed) and the optional lock that
-keeps two timed benchmarks from running at once on a shared machine."""
+"""Replacing a benchmark's section of a page in docs/ (written to a
+temporary name, then renamed), and the optional lock that keeps two timed
+benchmarks from running at once on a shared machine."""
 
 import contextlib
 import fcntl

@@ -22,8 +22,11 @@ import bpy
 import numpy as np
 from mathutils import Vector
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "build", "addon"))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))  # bench.helpers
+from bench.helpers.paths import use_addon  # noqa: E402
+
+use_addon()
+import colormap_scene  # noqa: E402
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
 
@@ -89,17 +92,8 @@ def build(pitch, orthographic=False):
     scene.render.threads = 2
     bpy.ops.mesh.primitive_plane_add(size=2000.0, location=(0, 0, 0))
     plane = bpy.context.active_object
-    material = bpy.data.materials.new("footprint")
-    material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.remove(tree.nodes["Principled BSDF"])
-    emission = tree.nodes.new("ShaderNodeEmission")
-    tree.links.new(emission.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
-    noise = tree.nodes.new("ShaderNodeTexNoise")
-    ramp = tree.nodes.new("ShaderNodeValToRGB")
-    tree.links.new(noise.outputs["Fac"], ramp.inputs["Fac"])
-    tree.links.new(ramp.outputs["Color"], emission.inputs["Color"])
-    tree.nodes.active = ramp
+    # Any noise-driven ramp: the bake adds the footprint group, which depends on the camera alone.
+    material, _, emission = colormap_scene.noise_ramp_material(name="footprint")
     plane.data.materials.append(material)
     bpy.ops.object.camera_add(location=(0.3, -2, 1.2), rotation=(math.radians(pitch), 0, math.radians(8)))
     camera = bpy.context.active_object
@@ -150,4 +144,5 @@ def main():
     penumbra.unregister()
 
 
-main()
+if __name__ == "__main__":
+    main()

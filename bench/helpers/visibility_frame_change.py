@@ -16,7 +16,7 @@ import numpy as np
 from penumbra import native
 from penumbra.visibility import runtime, scene_data
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from bench.helpers.paths import BUILD
 
 
 def _median_and_spread(values):
@@ -115,7 +115,7 @@ def runtime_accuracy(core, obj, scene):
 def kernel_per_target():
     """ns per vertex of the shading kernel on each SIMD target (one thread,
     100k vertices, 2 lobes, order 4, Phong), from bench/cpp/pose_shading_bench.cpp."""
-    exe = os.path.join(ROOT, "build", "bench", "penumbra_pose_shading_bench")
+    exe = os.path.join(BUILD, "bench", "penumbra_pose_shading_bench")
     out = subprocess.run([exe, "--quick"], capture_output=True, text=True, check=True).stdout
     per_target = {}
     for line in out.splitlines():

@@ -2,10 +2,10 @@
 Debian's Blender 3.4, headless under Xvfb with Mesa's llvmpipe. Run by
 colormap_benchmark.py:
 
-    xvfb-run -a blender -b --factory-startup --python bench/colormap_eevee_render.py -- OUT
+    xvfb-run -a blender -b --factory-startup --python bench/blender_scripts/colormap_eevee_render.py -- OUT
 
 Scenes, cache (OUT/eevee_results.json, resumable) and environment variables
-as bench/colormap_render.py (whose harness this uses); EEVEE's own:
+as bench/blender_scripts/colormap_render.py (whose harness this uses); EEVEE's own:
   PENUMBRA_BENCH_EEVEE_SAMPLES      render samples (taa_render_samples), "1,16,64"
   PENUMBRA_BENCH_EEVEE_REF_SCALE    the reference's supersampling factor K (8)
   PENUMBRA_BENCH_EEVEE_REF_SAMPLES  the reference's samples per large pixel (32)
@@ -45,9 +45,10 @@ os.environ.setdefault("LP_NUM_THREADS", os.environ.get("PENUMBRA_BENCH_THREADS",
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import colormap_render as harness  # noqa: E402
-from colormap_render import colormap_scene  # noqa: E402
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))  # bench.helpers
+from bench.blender_scripts import colormap_render as harness  # noqa: E402
+from bench.blender_scripts.colormap_render import colormap_scene  # noqa: E402
+from bench.helpers.log import log  # noqa: E402
 
 FILTER_SIZE = 1.5       # render.filter_size (EEVEE) = cycles.filter_width (what the bake reads), both defaults
 CHECK_FACTORS = (0.5, 0.75, 1.0, 1.5, 2.0)
@@ -179,7 +180,7 @@ class Eevee:
         harness.update(ctx.scene)
         seconds, _ = harness.render(ctx.scene, path)
         os.remove(path)
-        harness.log(f"{ctx.name}: first render (shader compilation) {seconds:.1f} s")
+        log(f"{ctx.name}: first render (shader compilation) {seconds:.1f} s")
         return seconds
 
     def probe_plan(self, full):
@@ -247,7 +248,7 @@ def first_sample_check(runner, results, cfg, out):
         images.append(harness.read(path))
         os.remove(path)
     difference = float(np.abs(images[0] - images[1]).max())
-    harness.log(f"first sample: max |filter_size {FILTER_SIZE} − 0.001| = {difference:.2e}")
+    log(f"first sample: max |filter_size {FILTER_SIZE} − 0.001| = {difference:.2e}")
     return {"blender": key, "max_abs_difference": difference, "size": list(size)}
 
 
