@@ -119,3 +119,14 @@ def feed(socket, path=()):
 def driver(socket, path=()):
     """The output socket that really drives an input, or None."""
     return feed(socket, path).output
+
+
+def source_in_tree(socket):
+    """The output socket of `socket`'s own tree whose value reaches it, for a
+    link that takes its place: the driver when it is in that tree, else the
+    output its live link comes from (a group node's, a reroute's), which
+    carries the same value. None when nothing drives it."""
+    fed = feed(socket)
+    if fed.node is None:
+        return None
+    return fed.output if not fed.path else live_link(socket).from_socket

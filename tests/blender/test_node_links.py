@@ -181,3 +181,23 @@ def test_a_walk_that_does_not_end_is_refused(factory_scene, monkeypatch):
     tree.links.new(_value(tree, 1.0, "Far").outputs[0], socket)
     with pytest.raises(node_links.NodeTreeCycle, match="loop"):
         node_links.feed(ramp.inputs["Fac"])
+
+
+def test_the_source_in_the_inputs_own_tree_stands_for_the_driver(factory_scene):
+    """What a link in the input's place takes: the driver itself when it is
+    in the same tree (past reroutes), the group node's output when it is
+    inside a group, nothing behind a muted link."""
+    tree = _tree()
+    ramp, source = _ramp(tree), _value(tree, 0.3, "Source")
+    reroute = tree.nodes.new("NodeReroute")
+    tree.links.new(source.outputs[0], reroute.inputs[0])
+    link = tree.links.new(reroute.outputs[0], ramp.inputs["Fac"])
+    assert node_links.source_in_tree(ramp.inputs["Fac"]) == source.outputs[0]
+    link.is_muted = True
+    assert node_links.source_in_tree(ramp.inputs["Fac"]) is None
+    group, _, (group_out,) = _group("source group")
+    group.links.new(_value(group, 0.7, "Inner").outputs[0], group_out.inputs["Out"])
+    node = tree.nodes.new("ShaderNodeGroup")
+    node.node_tree = group
+    tree.links.new(node.outputs["Out"], ramp.inputs["Fac"])
+    assert node_links.source_in_tree(ramp.inputs["Fac"]) == node.outputs["Out"]

@@ -51,14 +51,9 @@ def driving_socket(node):
 
 
 def fac_source_in_tree(node):
-    """The socket of the ramp's own tree whose value reaches its Fac, for
-    linking in the ramp's place: the driver when it is in that tree, else
-    the output the Fac's live link comes from (a group node's, a reroute's),
-    which carries the same value. None when nothing drives the Fac."""
-    fed = driving(node)
-    if fed.node is None:
-        return None
-    return fed.output if not fed.path else node_links.live_link(node.inputs["Fac"]).from_socket
+    """The socket of the ramp's own tree to link in place of its Fac, or None
+    (node_links.source_in_tree)."""
+    return node_links.source_in_tree(node.inputs["Fac"])
 
 
 def driving_noise(node):
