@@ -22,8 +22,6 @@ These are the shader trees' rules, the only trees Penumbra reads."""
 # Blender itself refuses a group that contains itself.
 MAX_STEPS = 1000
 
-_GROUP_NODES = frozenset({"ShaderNodeGroup", "GeometryNodeGroup"})
-
 
 class NodeTreeCycle(ValueError):
     """A walk did not end: groups nested in themselves."""
@@ -97,7 +95,7 @@ def feed(socket, path=()):
             if internal is None:
                 return Feed(None, None, owner, path)
             socket = internal.from_socket
-        elif node.bl_idname in _GROUP_NODES:
+        elif node.bl_idname == "ShaderNodeGroup":
             inner = node.node_tree and active_output(n for n in node.node_tree.nodes
                                                      if n.bl_idname == "NodeGroupOutput")
             matched = counterpart(inner.inputs, output) if inner else None
