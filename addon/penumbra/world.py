@@ -12,10 +12,8 @@ The wiring it follows, as Blender evaluates it:
   Color: its value, an RGB node, or an Environment Texture) ← Vector ←
   Mapping / Vector Rotate nodes ← Texture Coordinate (Generated or Object)
   or nothing (the view direction).
-On the way it passes through reroutes, muted nodes (their internal links),
-muted links (as if absent), and node groups (a group node's output is its
-active Group Output's input inside; a Group Input's output is the group
-node's input outside), recursively.
+On the way it follows links as Blender evaluates them (node_links.py):
+through reroutes, muted nodes, node groups, never a muted link.
 
 Conventions. Directions are Blender world directions (+Z up, from the scene
 towards the light); the equirectangular convention is core/common/latlong.hpp.
@@ -55,11 +53,8 @@ import os
 
 import numpy as np
 
-from . import native
+from . import native, node_links
 from .compat import uses_nodes
-
-# How far a walk may go (reroutes, groups) before the tree is declared cyclic.
-_MAX_STEPS = 1000
 
 
 class WorldError(ValueError):
@@ -190,71 +185,21 @@ def engine_target(engine):
     return None
 
 
-def _active_output(nodes, idname, target):
-    """The output node Blender renders: among outputs for this engine or for
+def _active_output(nodes, target):
+    """The World Output Blender renders: among outputs for this engine or for
     all, an exact target match wins over 'ALL', then the active one, then the
     first (ntreeShaderOutputNode in source/blender/nodes/shader/node_shader_tree.cc)."""
-    outputs = [n for n in nodes if n.bl_idname == idname]
-    if idname == "ShaderNodeOutputWorld":
-        outputs = [n for n in outputs if n.target == "ALL" or n.target == target]
-        exact = [n for n in outputs if n.target == target]
-        outputs = exact or outputs
-    return next((n for n in outputs if n.is_active_output), outputs[0] if outputs else None)
-
-
-def _matching(sockets, socket):
-    """The socket of `sockets` that is `socket`'s counterpart across a group
-    boundary (same identifier; by position if none)."""
-    for candidate in sockets:
-        if candidate.identifier == socket.identifier:
-            return candidate
-    index = list(socket.node.outputs if socket.is_output else socket.node.inputs).index(socket)
-    return sockets[index] if index < len(sockets) else None
-
-
-class Feed:
-    """What drives an input socket: `node` and its `output` socket, inside the
-    groups `path` (outermost first). When nothing does, `node` is None and
-    `socket` is the input whose own value Blender uses: a reroute or a muted
-    node with nothing behind it is dropped with its links (Blender's
-    localize(), node_shader_tree.cc), so that is the input it fed."""
-
-    def __init__(self, node, output, socket, path):
-        self.node, self.output, self.socket, self.path = node, output, socket, path
+    outputs = [n for n in nodes if n.bl_idname == "ShaderNodeOutputWorld" and n.target in ("ALL", target)]
+    exact = [n for n in outputs if n.target == target]
+    return node_links.active_output(exact or outputs)
 
 
 def feed(socket, path=()):
-    """The Feed of an input socket, through reroutes, muted nodes and links,
-    group nodes and Group Input nodes."""
-    owner = socket  # the input whose value counts if the walk ends in nothing
-    for _ in range(_MAX_STEPS):
-        link = next((l for l in socket.links if l.is_valid and not l.is_muted), None)
-        if link is None:
-            return Feed(None, None, owner, path)
-        node, output = link.from_node, link.from_socket
-        if node.bl_idname == "NodeReroute":
-            socket = node.inputs[0]
-        elif node.mute:
-            internal = next((l for l in node.internal_links if l.to_socket == output), None)
-            if internal is None:
-                return Feed(None, None, owner, path)
-            socket = internal.from_socket
-        elif node.bl_idname == "ShaderNodeGroup":
-            inner = _active_output(node.node_tree.nodes, "NodeGroupOutput", None) if node.node_tree else None
-            matched = _matching(inner.inputs, output) if inner else None
-            if matched is None:
-                return Feed(None, None, owner, path)
-            socket = owner = matched
-            path = path + (node,)
-        elif node.bl_idname == "NodeGroupInput":
-            matched = _matching(path[-1].inputs, output) if path else None
-            if matched is None:
-                return Feed(None, None, owner, path)
-            socket = owner = matched
-            path = path[:-1]
-        else:
-            return Feed(node, output, socket, path)
-    raise WorldError("the World's node tree loops through its node groups: break the loop")
+    """node_links.feed, a loop through node groups being a WorldError."""
+    try:
+        return node_links.feed(socket, path)
+    except node_links.NodeTreeCycle as error:
+        raise WorldError(f"the World's node tree: {error}") from None
 
 
 def read_scene(scene):
@@ -272,7 +217,7 @@ def read(world, engine=None):
     if not uses_nodes(world):  # always node-based from 5.0 (compat.py)
         r.kind, r.colour, r.source = "uniform", np.array(world.color[:3], dtype=np.float64), "World colour"
         return r
-    output = _active_output(world.node_tree.nodes, "ShaderNodeOutputWorld", engine_target(engine))
+    output = _active_output(world.node_tree.nodes, engine_target(engine))
     if output is None:
         r.source = "no World Output: black"
         r.problems.append(f"the World '{world.name}' has no World Output node{_for_engine(engine)}: "

@@ -44,6 +44,7 @@ from collections import namedtuple
 import bpy
 
 from . import noise_statistics
+from .. import node_links
 
 NOISE = "ShaderNodeTexNoise"
 MUSGRAVE = "ShaderNodeTexMusgrave"
@@ -65,9 +66,10 @@ class NoiseModel:
     """value = offset + Σ c_i (Fac_i − 0.5), Fac_i the normalized Detail-0
     Noise Texture at Scale·lacunarity^i on the distorted position.
 
-    scale / w: the input's value, None when it is linked (then scale_from /
-    w_from hold the socket linked into it, which the filter takes as a link;
-    vector_from likewise, None for the implicit coordinates)."""
+    scale / w: the input's value, None when it is driven (then scale_from /
+    w_from hold the output socket that really drives it, node_links.feed, in
+    the ramp's tree, which the filter takes as a link; vector_from likewise,
+    None for the implicit coordinates)."""
     node_name: str
     node_type: str              # NOISE or MUSGRAVE
     noise_type: str             # 'FBM', 'MULTIFRACTAL', ... (Blender's enum)
@@ -182,12 +184,32 @@ def _label(node):
     return f"{_LABELS.get(node.bl_idname, node.bl_idname)} '{node.name}'"
 
 
-def _link(socket):
-    """The socket feeding `socket` through a live link, or None."""
-    for link in socket.links:
-        if not getattr(link, "is_muted", False):
-            return link.from_socket
-    return None
+def _link(socket, path):
+    """The output socket that really drives `socket` (node_links.feed), or
+    None; `path`: the groups the noise sits in."""
+    return node_links.driver(socket, path) if socket is not None else None
+
+
+def _wireable_link(node, identifier, path):
+    """The driver of a Vector, Scale or W input, which the filter links into
+    its own node group in the ramp's tree: None when nothing drives it (the
+    texture's own Vector then means its implicit coordinates). Raises
+    NoiseNotDerivable when the filter cannot link it: a driver inside a
+    node group, or a Vector that is one constant point."""
+    socket = _input(node, identifier)
+    if socket is None:
+        return None
+    fed = node_links.feed(socket, path)
+    if fed.node is not None and fed.path:
+        raise NoiseNotDerivable(
+            f"{_label(node)}: its {socket.name} comes from '{fed.node.name}' inside the node group "
+            f"'{fed.path[-1].name}', which the filter (beside the ramp) cannot link to; bring it in through "
+            f"the group's inputs, or ungroup the nodes")
+    if fed.node is None and identifier == "Vector" and fed.socket != socket:
+        raise NoiseNotDerivable(
+            f"{_label(node)}: its Vector is the unconnected input '{fed.socket.name}' of '{fed.socket.node.name}', "
+            "one point for the whole surface, so the noise does not vary; connect texture coordinates to it")
+    return fed.output
 
 
 def _type_name(node, prop, value):
@@ -203,10 +225,10 @@ def _unused_inputs(noise_type):
             "HETERO_TERRAIN": {"Gain"}}.get(noise_type, set())
 
 
-def _check_links(node, noise_type):
+def _check_links(node, noise_type, path):
     linked = [s.name for s in node.inputs
               if s.enabled and s.identifier not in LINKABLE and s.identifier not in _unused_inputs(noise_type)
-              and _link(s) is not None]
+              and _link(s, path) is not None]
     if linked:
         names = " and ".join(linked)
         verb = "is" if len(linked) == 1 else "are"
@@ -241,9 +263,11 @@ def _input(node, identifier):
     return None
 
 
-def _value(node, identifier, default=0.0):
+def _value(node, identifier, path, default=0.0):
+    """An undriven input's value: its own, or that of the input it stands for
+    (a group node's input behind a Group Input; node_links.Feed.socket)."""
     socket = _input(node, identifier)
-    return float(socket.default_value) if socket is not None else default
+    return float(node_links.feed(socket, path).socket.default_value) if socket is not None else default
 
 
 def _nonlinear(node, type_label, detail, hint):
@@ -252,10 +276,13 @@ def _nonlinear(node, type_label, detail, hint):
         f"mean and spread can't be derived; use fBm{hint}, or {_FROM_IMAGE}")
 
 
-def read_noise(node, output=None):
+def read_noise(node, output=None, path=()):
     """The NoiseModel of a Noise or Musgrave Texture whose `output` (a socket
-    or identifier; None: Fac) drives the ramp. Raises NoiseNotDerivable with
-    a message naming the node and the setting when it can't be derived."""
+    or identifier; None: Fac) drives the ramp; `path`: the node groups it
+    sits in, seen from the ramp's tree (node_links.Feed.path). Its inputs
+    are read as Blender evaluates them (node_links.feed). Raises
+    NoiseNotDerivable with a message naming the node and the setting when it
+    can't be derived."""
     if node.bl_idname not in _LABELS:
         raise NoiseNotDerivable(f"'{node.name}' is a {node.bl_label} node, not a Noise or Musgrave Texture: its "
                                 f"per-pixel mean and spread can't be derived; {_FROM_IMAGE}")
@@ -274,31 +301,31 @@ def read_noise(node, output=None):
         raise NoiseNotDerivable(
             f"{_label(node)}: type {type_label} is nonlinear in its octaves (it squares |noise|), so its "
             f"per-pixel mean and spread can't be derived; use fBm, or {_FROM_IMAGE}")
-    _check_links(node, noise_type)
+    _check_links(node, noise_type, path)
     if node.bl_idname == MUSGRAVE:
-        offset, coefficients, lacunarity = _musgrave_terms(node, noise_type, type_label)
+        offset, coefficients, lacunarity = _musgrave_terms(node, noise_type, type_label, path)
         distortion = 0.0
     else:
-        offset, coefficients, lacunarity = _noise_terms(node, noise_type, type_label)
-        distortion = _value(node, "Distortion")
-    scale_from, w_from = _link(_input(node, "Scale")), _link(_input(node, "W"))
+        offset, coefficients, lacunarity = _noise_terms(node, noise_type, type_label, path)
+        distortion = _value(node, "Distortion", path)
+    scale_from, w_from = _wireable_link(node, "Scale", path), _wireable_link(node, "W", path)
     return NoiseModel(
         node_name=node.name, node_type=node.bl_idname, noise_type=noise_type, dimensions=dimensions,
         offset=float(offset), coefficients=tuple(float(c) for c in coefficients), lacunarity=float(lacunarity),
-        distortion=distortion, scale=None if scale_from else _value(node, "Scale"),
-        w=None if w_from else _value(node, "W"), vector_from=_link(_input(node, "Vector")),
+        distortion=distortion, scale=None if scale_from else _value(node, "Scale", path),
+        w=None if w_from else _value(node, "W", path), vector_from=_wireable_link(node, "Vector", path),
         scale_from=scale_from, w_from=w_from)
 
 
-def _noise_terms(node, noise_type, type_label):
+def _noise_terms(node, noise_type, type_label, path):
     """(offset, c_i, lacunarity) of a Noise Texture (noise_fbm and friends)."""
-    detail = min(max(_value(node, "Detail"), 0.0), 15.0)
-    roughness = _value(node, "Roughness")
+    detail = min(max(_value(node, "Detail", path), 0.0), 15.0)
+    roughness = _value(node, "Roughness", path)
     legacy = bpy.app.version < (4, 0, 0)
     roughness = min(max(roughness, 0.0), 1.0) if legacy else max(roughness, 0.0)
-    lacunarity = _value(node, "Lacunarity", 2.0)
+    lacunarity = _value(node, "Lacunarity", path, 2.0)
     if noise_type != "FBM":
-        return _one_octave_noise(node, noise_type, type_label, detail, roughness) + (lacunarity,)
+        return _one_octave_noise(node, noise_type, type_label, detail, roughness, path) + (lacunarity,)
     if getattr(node, "normalize", True):
         return 0.5, noise_statistics.octave_weights(detail, roughness), lacunarity
     n = int(math.floor(detail))
@@ -309,38 +336,38 @@ def _noise_terms(node, noise_type, type_label):
     return 0.0, coefficients, lacunarity
 
 
-def _one_octave_noise(node, noise_type, type_label, detail, roughness):
+def _one_octave_noise(node, noise_type, type_label, detail, roughness, path):
     """4.1+ multifractal, hybrid multifractal and hetero terrain multiply
     octaves together (fractal_noise.h); with Detail 0 or Roughness 0 only the
     first octave is left: 1 + s_0, and Offset + s_0 for the other two."""
     if detail > 0.0 and roughness > 0.0:
         raise _nonlinear(node, type_label, detail, " (or Detail 0 / Roughness 0 for a single octave)")
-    base = 1.0 if noise_type == "MULTIFRACTAL" else _value(node, "Offset")
+    base = 1.0 if noise_type == "MULTIFRACTAL" else _value(node, "Offset", path)
     return base, [2.0]
 
 
-def _musgrave_terms(node, noise_type, type_label):
+def _musgrave_terms(node, noise_type, type_label, path):
     """(offset, c_i, lacunarity) of a 3.x Musgrave Texture (musgrave.h)."""
-    octaves = min(max(_value(node, "Detail"), 0.0), 15.0)
-    h = max(_value(node, "Dimension"), 1e-5)
-    lacunarity = max(_value(node, "Lacunarity"), 1e-5)
+    octaves = min(max(_value(node, "Detail", path), 0.0), 15.0)
+    h = max(_value(node, "Dimension", path), 1e-5)
+    lacunarity = max(_value(node, "Lacunarity", path), 1e-5)
     n = int(math.floor(octaves))
     f = octaves - n
     if noise_type != "FBM":
-        return _one_octave_musgrave(node, noise_type, type_label, octaves, n, f) + (lacunarity,)
+        return _one_octave_musgrave(node, noise_type, type_label, octaves, n, f, path) + (lacunarity,)
     coefficients = [2.0 * lacunarity ** (-h * i) for i in range(n)]
     if f > 0.0 or not coefficients:  # Detail 0: the value is 0 (one zero coefficient)
         coefficients.append(2.0 * f * lacunarity ** (-h * n))
     return 0.0, coefficients, lacunarity
 
 
-def _one_octave_musgrave(node, noise_type, type_label, octaves, n, f):
+def _one_octave_musgrave(node, noise_type, type_label, octaves, n, f, path):
     """3.x Musgrave types whose value is linear in the first octave s_0
     (musgrave.h; loops run i < ⌊Detail⌋, the fraction f adds a partial one):
     multifractal 1 + f·s_0 (Detail < 1) or 1 + s_0 (Detail 1); hybrid
     f·(s_0 + Offset) (Detail < 1) or s_0 + Offset (Detail 1); hetero terrain
     Offset + s_0 (Detail 0 or 1)."""
-    base = _value(node, "Offset")
+    base = _value(node, "Offset", path)
     if noise_type == "MULTIFRACTAL" and (n == 0 or (n == 1 and f == 0.0)):
         return 1.0, [2.0 * (f if n == 0 else 1.0)]
     if noise_type == "HYBRID_MULTIFRACTAL" and (n == 0 or (n == 1 and f == 0.0)):

@@ -70,15 +70,14 @@ def _raster_offset(scene):
     return res_x / 2.0 - shift_x * size, res_y / 2.0 - shift_y * size
 
 
-def _coordinate_scale(noise, obj):
-    """Texture-coordinate units per world unit of the noise's Vector input
+def _coordinate_scale(socket, obj):
+    """Texture-coordinate units per world unit of the noise's Vector input,
+    `socket` what drives it (NoiseModel.vector_from; None: unlinked)
     (Generated / unlinked: 1 / object dimensions; Object: 1 / object scale)."""
-    links = noise.inputs["Vector"].links
     dims = sorted((d for d in (obj.dimensions if obj else ()) if d > 1e-9), reverse=True)[:2]
     generated = 1.0 / math.sqrt(dims[0] * dims[-1]) if dims else 1.0
-    if not links:
+    if socket is None:
         return generated, None
-    socket = links[0].from_socket
     if socket.node.bl_idname == "ShaderNodeTexCoord":
         if socket_is(socket, "Generated"):
             return generated, None
@@ -193,12 +192,15 @@ class BakePlan:
         if self.noise is not None:
             self._plan_noise(context)
 
-    def _plan_noise(self, context):
+    def _read_noise_model(self):
+        fed = ramp_io.driving(self.node)
         try:
-            self.noise_model = noise_model.read_noise(self.noise, ramp_io.driving_socket(self.node))
+            return noise_model.read_noise(fed.node, fed.output, fed.path)
         except noise_model.NoiseNotDerivable as error:
             raise BakeError(f"{error} (nothing was changed)") from None
-        model = self.noise_model
+
+    def _plan_noise(self, context):
+        self.noise_model = model = self._read_noise_model()
         if not model.lacunarity > 1.0:
             raise BakeError(f"the noise's Lacunarity is {model.lacunarity:g}: the filter needs a value > 1")
         if model.dimensions == "1D":
@@ -214,7 +216,7 @@ class BakePlan:
         self.raster_offset = _raster_offset(context.scene)
         if warning:
             self.warnings.append(warning)
-        self.coordinate_scale, warning = _coordinate_scale(self.noise, context.object)
+        self.coordinate_scale, warning = _coordinate_scale(self.noise_model.vector_from, context.object)
         if warning:
             self.warnings.append(warning)
         self.filter_stddev = noise_statistics.pixel_filter_stddev(context.scene)
@@ -290,6 +292,8 @@ class BakePlan:
             raise BakeError(f"ColorRamp '{self.node_name}' in '{self.material_name}' was changed (its stops, "
                             f"or what drives its Fac) while its lookup was being built: {again}")
         self.material, self.node, self.noise = material, node, ramp_io.driving_noise(node)
+        if self.noise is not None:  # the sockets it links, from this tree (an undo replaces the tree)
+            self.noise_model = self._read_noise_model()
 
     def apply(self, lut):
         """Writes the files and edits the tree; if anything fails, puts the
@@ -326,7 +330,7 @@ class BakePlan:
             targets = [link.to_socket for link in ramp.outputs[out_name].links]
             for socket in targets:  # a new link into an input replaces the old one
                 tree.links.new(group_node.outputs[out_name], socket)
-        source = ramp_io.driving_socket(ramp)
+        source = ramp_io.fac_source_in_tree(ramp)
         if self.noise is not None:
             self._wire_noise(tree, group_node, source)
         elif source is not None:
@@ -363,9 +367,8 @@ class BakePlan:
         footprint.inputs["Orthographic"].default_value = 1.0 if self.orthographic else 0.0
         footprint.inputs["Raster Offset X"].default_value = self.raster_offset[0]
         footprint.inputs["Raster Offset Y"].default_value = self.raster_offset[1]
-        vector = self.noise.inputs["Vector"]
-        if vector.is_linked:
-            tree.links.new(vector.links[0].from_socket, noise_filter.inputs["Vector"])
+        if self.noise_model.vector_from is not None:
+            tree.links.new(self.noise_model.vector_from, noise_filter.inputs["Vector"])
         else:  # an unlinked texture vector means Generated coordinates
             coords = tree.nodes.new("ShaderNodeTexCoord")
             coords.name = coords.label = "Penumbra Noise Coordinates"

@@ -3,6 +3,8 @@
 import bpy
 import numpy as np
 
+from .. import node_links
+
 # Entries of the table a renderer evaluates a ColorRamp through (measured by
 # tests/blender/colormap/test_ramp_table.py): Cycles in Blender 3.x samples
 # 256 at i/255 (RAMP_TABLE_SIZE); EEVEE in every version, and Cycles in 4.5
@@ -36,20 +38,29 @@ def ramp_modes(node):
     return ramp.interpolation, ramp.color_mode, ramp.hue_interpolation
 
 
+def driving(node):
+    """node_links.Feed of the ramp's Fac: what really drives it, through
+    reroutes, muted nodes and node groups, never a muted link."""
+    return node_links.feed(node.inputs["Fac"])  # "Fac" also finds 5.x's "Factor" (its identifier)
+
+
 def driving_socket(node):
-    """The output socket linked into the ramp's Fac input, or None."""
-    links = node.inputs["Fac"].links  # "Fac" also finds 5.x's "Factor" (its identifier)
-    return links[0].from_socket if links else None
+    """The output socket that really drives the ramp's Fac, or None; inside a
+    node group when driving(node).path says so."""
+    return driving(node).output
+
+
+def fac_source_in_tree(node):
+    """The socket of the ramp's own tree to link in place of its Fac, or None
+    (node_links.source_in_tree)."""
+    return node_links.source_in_tree(node.inputs["Fac"])
 
 
 def driving_noise(node):
-    """The Noise (or 3.x Musgrave) Texture node that drives the ramp directly,
-    or None. Any of its outputs counts: the bake then says whether that
-    output's statistics can be derived (noise_model.read_noise)."""
-    socket = driving_socket(node)
-    if socket is None:
-        return None
-    source = socket.node
-    if source.bl_idname in ("ShaderNodeTexNoise", "ShaderNodeTexMusgrave"):
+    """The Noise (or 3.x Musgrave) Texture node that drives the ramp, or None.
+    Any of its outputs counts: the bake then says whether that output's
+    statistics can be derived (noise_model.read_noise)."""
+    source = driving(node).node
+    if source is not None and source.bl_idname in ("ShaderNodeTexNoise", "ShaderNodeTexMusgrave"):
         return source
     return None

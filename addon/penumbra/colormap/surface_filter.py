@@ -53,7 +53,7 @@ import bpy
 
 from . import node_groups
 from .operators import BakeError, _editable_material
-from .. import world
+from .. import node_links, world
 from ..errors import CORE_ERRORS, describe
 
 FILTERS = {
@@ -204,10 +204,11 @@ def _move_output_links(tree, source, target, names=("Color", "Alpha")):
 
 
 def _feed(tree, ramp, socket, ramp_input):
-    """socket takes what fed the filtered ramp's input: its link, or its value."""
-    links = ramp.inputs[ramp_input].links
-    if links:
-        tree.links.new(links[0].from_socket, socket)
+    """socket takes what fed the filtered ramp's input: what drives it (never
+    a muted link; node_links.py), or its value."""
+    source = node_links.source_in_tree(ramp.inputs[ramp_input])
+    if source is not None:
+        tree.links.new(source, socket)
     else:
         socket.default_value = ramp.inputs[ramp_input].default_value
 
