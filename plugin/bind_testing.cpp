@@ -1,6 +1,7 @@
 // _penumbra.testing: hooks for tests and benchmarks, kept apart from the API:
-// failures injected into the parallel helper, a probe of that helper, and
-// internals of the light-rig tool that renderers and tests inspect.
+// failures injected into the parallel helper, a probe of that helper, the
+// steps of durable writes and a failing fsync, and internals of the light-rig
+// tool that renderers and tests inspect.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -65,6 +66,26 @@ void bind_parallel_hooks(py::module_& t) {
           "Runs the core's parallel helper on busy blocks; returns how many indices ran.");
 }
 
+void bind_durable_write_hooks(py::module_& t) {
+    bind_enum<testing::FsyncFailure>(t, "FsyncFailure", "kind",
+        {{"NONE", testing::FsyncFailure::none}, {"FILE", testing::FsyncFailure::file},
+         {"FOLDER", testing::FsyncFailure::folder}},
+        "Which fsync of a durable write an injected failure hits: none (NONE clears one), the written file's, or "
+        "its folder's after the rename.");
+
+    t.def("record_durable_steps", &testing::record_durable_steps,
+    "Starts recording the steps of every durable write (models, pieces, images, write_file_durably, "
+    "replace_file_durably), forgetting earlier ones.");
+
+    t.def("recorded_durable_steps", &testing::recorded_durable_steps,
+    "The steps recorded since record_durable_steps(), in order, and stops recording: 'fsync file <path>', "
+    "'rename <from> -> <to>', 'fsync folder <folder>'.");
+
+    t.def("inject_fsync_failure", &testing::inject_fsync_failure, py::arg("kind") = testing::FsyncFailure::file,
+    "The next durable write's fsync of `kind` (FILE or FOLDER) fails with EIO, as a failing disk's would; "
+    "one-shot. kind=NONE clears it.");
+}
+
 py::dict light_region_table(const py::array& directions, int cells_per_face, double lobe_half_angle) {
     const lights::AngularRegionTable t(vectors3(directions, "directions", true), cells_per_face, lobe_half_angle);
     std::vector<double> radius(t.region_count());
@@ -106,6 +127,7 @@ void bind_light_hooks(py::module_& t) {
 
 void bind_testing(py::module_& t) {
     bind_parallel_hooks(t);
+    bind_durable_write_hooks(t);
     bind_light_hooks(t);
 }
 

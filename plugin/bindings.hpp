@@ -26,6 +26,7 @@ void bind_lights_rig(pybind11::module_& lights);  // RigBuilder
 void bind_colormap(pybind11::module_& colormap);  // colour-map lookups, ColorRamps, microsurface statistics
 
 void bind_settings(pybind11::module_& m);       // settings_spec: the core's defaults and ranges (top level)
+void bind_files(pybind11::module_& m);          // durable file writes for the add-on (top level)
 void bind_testing(pybind11::module_& testing);  // hooks for tests and benchmarks
 
 }  // namespace penumbra::bindings

@@ -4,7 +4,8 @@
 // One submodule per part of the core (image, color, sh, visibility, lights,
 // colormap) and `testing` for the hooks tests and benchmarks use. The top
 // level keeps only what belongs to the whole module (__version__,
-// build_info, settings_spec, the exceptions) and four aliases of sh and
+// build_info, settings_spec, the exceptions, the durable file writes every
+// tool publishes through) and four aliases of sh and
 // colormap functions that scripts reach for first.
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -85,6 +86,7 @@ PYBIND11_MODULE(_penumbra, m) {
                                      "Pre-filtered colour-map lookups, ColorRamps, microsurface statistics.");
     bind_colormap(colormap);
     bind_settings(m);
+    bind_files(m);
     py::module_ testing = submodule(m, "testing", "Hooks for tests and benchmarks; not for add-on code.");
     bind_testing(testing);
 

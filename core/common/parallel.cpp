@@ -155,29 +155,4 @@ void parallel_for(std::size_t count, const ParallelOptions& options, const Range
                     progress);
 }
 
-namespace testing {
-
-namespace {
-std::mutex injection_mutex;
-std::string injection_prefix;
-WorkerFailure injection = WorkerFailure::none;
-}  // namespace
-
-void inject_worker_failure(const std::string& stage_prefix, WorkerFailure failure) {
-    std::lock_guard<std::mutex> lock(injection_mutex);
-    injection_prefix = stage_prefix;
-    injection = failure;
-}
-
-WorkerFailure take_worker_failure(const char* stage) {
-    std::lock_guard<std::mutex> lock(injection_mutex);
-    if (injection == WorkerFailure::none || std::string(stage).rfind(injection_prefix, 0) != 0)
-        return WorkerFailure::none;
-    const WorkerFailure armed = injection;
-    injection = WorkerFailure::none;
-    return armed;
-}
-
-}  // namespace testing
-
 }  // namespace penumbra

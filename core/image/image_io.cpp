@@ -7,8 +7,8 @@
 #include <filesystem>
 #include <memory>
 
+#include "common/durable_file.hpp"
 #include "common/error.hpp"
-#include "image/atomic_file.hpp"
 
 namespace penumbra {
 
@@ -135,7 +135,7 @@ void write_with_oiio(const std::string& path, const Image& image, OIIO::ImageSpe
         spec.attribute("oiio:ColorSpace", colorspace);
         spec.attribute("penumbra:colorspace", colorspace);
     }
-    write_atomically(path, [&](const std::string& temporary) {
+    write_file_durably(path, [&](const std::string& temporary) {
         auto out = OIIO::ImageOutput::create(temporary);
         if (!out)
             throw IoError("cannot write '" + path + "': " + last_oiio_error("unsupported file extension"));

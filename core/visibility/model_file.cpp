@@ -6,9 +6,9 @@
 #include <iterator>
 
 #include "common/binary_io.hpp"
+#include "common/durable_file.hpp"
 #include "common/error.hpp"
 #include "common/hash.hpp"
-#include "image/atomic_file.hpp"
 
 namespace penumbra::visibility {
 
@@ -27,7 +27,7 @@ void write_file(const std::string& path, const char* magic, std::uint32_t versio
     std::memcpy(header.data() + 12, &reserved, 4);
     std::memcpy(header.data() + 16, &size, 8);
     std::memcpy(header.data() + 24, &checksum, 8);
-    write_atomically(path, [&](const std::string& temporary) {
+    write_file_durably(path, [&](const std::string& temporary) {
         std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
         if (!out) throw IoError("cannot create '" + temporary + "' (is the folder writable?)");
         out.write(header.data(), std::streamsize(header.size()));

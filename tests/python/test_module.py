@@ -103,7 +103,8 @@ ALIASES = {"sh_eval": ("sh", "eval"), "phong_operator": ("sh", "phong_operator")
 
 def test_the_top_level_holds_the_submodules_and_nothing_else_but_module_wide_names():
     public = {name for name in dir(_penumbra) if not name.startswith("_")}
-    expected = {"build_info", "settings_spec", "PenumbraError", "IoError", "Cancelled", *SUBMODULES, *ALIASES}
+    expected = {"build_info", "settings_spec", "PenumbraError", "IoError", "Cancelled", "write_file_durably",
+                "replace_file_durably", *SUBMODULES, *ALIASES}
     assert public == expected
     assert isinstance(_penumbra.__version__, str)
 
