@@ -392,7 +392,9 @@ class BakePlan:
 class _Rollback:
     """What apply() may change, recorded before it starts: the tree's nodes,
     links and the ramp's state, the image and node-group data blocks, and the
-    output folder (new files are removed, overwritten lookups restored)."""
+    output folder (new files are removed, overwritten lookups restored). The
+    lookups are moved aside and back by _penumbra.replace_file_durably, so
+    that after a power cut a backup, or a restored lookup, is really there."""
 
     def __init__(self, plan):
         self.tree = plan.material.node_tree if plan.node is not None else None
@@ -409,7 +411,7 @@ class _Rollback:
         for path in plan.lookup_paths():
             if os.path.isfile(path):
                 backup = path + ".penumbra-backup"
-                os.replace(path, backup)
+                native.require().replace_file_durably(path, backup)
                 self.backups[path] = backup
 
     def restore(self):
@@ -430,7 +432,7 @@ class _Rollback:
                 if not name.endswith(".penumbra-backup"):
                     os.remove(os.path.join(self.folder, name))
         for path, backup in self.backups.items():
-            os.replace(backup, path)
+            native.require().replace_file_durably(backup, path)
             for image in self.images:  # an earlier lookup reloaded from the new file
                 if image.filepath and os.path.normpath(bpy.path.abspath(image.filepath)) == path:
                     image.reload()

@@ -191,21 +191,17 @@ class _Job:
         op = self.op
         s = self.scene.penumbra.light_rig
         # Everything that can fail without touching the .blend comes first:
-        # the JSON (to a temporary name) and the preview picture.
-        json_path, json_tmp = self.write_json(rig)
+        # the JSON (its text and folder) and the preview picture.
+        json_path, json_text = self.rig_json(rig)
+        image = self.builder.preview(rig["directions"][0], rig["rgb"][0], 512)
+        write = rig_objects.write_rig(self.scene, s, rig, op.frame_start, op.limit_shadows)
         try:
-            image = self.builder.preview(rig["directions"][0], rig["rgb"][0], 512)
-            write = rig_objects.write_rig(self.scene, s, rig, op.frame_start, op.limit_shadows)
-            try:
-                rig_objects.store_preview(PREVIEW_NAME, image)
-                os.replace(json_tmp, json_path)
-            except BaseException:
-                write.rollback()
-                raise
-            write.commit()
-        finally:
-            if os.path.exists(json_tmp):
-                os.remove(json_tmp)
+            rig_objects.store_preview(PREVIEW_NAME, image)
+            self.write_json(json_path, json_text)
+        except BaseException:
+            write.rollback()
+            raise
+        write.commit()
         collection = write.collection
         defects = {k: sum(d[k] for d in rig["defects"]) for k in ("nan", "inf", "negative")}
         bad = sum(defects.values())
@@ -216,8 +212,13 @@ class _Job:
         s.last_report = msg[:250]
         return msg, bad
 
-    def write_json(self, rig):
-        """Writes the JSON to a temporary name beside its path; returns (path, temporary)."""
+    def write_json(self, path, text):
+        """Publishes the rig's JSON, last, once the rig is in the scene (a failed
+        build leaves the JSON there before): whole, and kept through a power cut."""
+        self.core.write_file_durably(path, text.encode())
+
+    def rig_json(self, rig):
+        """The rig's JSON and where it goes, its folder made; returns (path, text)."""
         path = bpy.path.abspath(self.op.json_path or "//penumbra_light_rig.json")
         if path.startswith("//") or not bpy.data.filepath and self.op.json_path.startswith("//"):
             path = os.path.join(bpy.app.tempdir or tempfile.gettempdir(),
@@ -243,15 +244,7 @@ class _Job:
             "frames": frames,
         }
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
-        tmp = path + ".tmp"
-        try:
-            with open(tmp, "w") as f:
-                json.dump(doc, f)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.remove(tmp)
-            raise
-        return path, tmp
+        return path, json.dumps(doc)
 
 
 class PENUMBRA_OT_build_light_rig(modal_job.JobOperator, bpy.types.Operator):

@@ -156,9 +156,23 @@ def test_failure_after_the_lookup_is_written_changes_nothing(addon, tmp_path, mo
         raise RuntimeError("simulated failure while building the node group")
 
     monkeypatch.setattr(node_groups, "filtered_ramp_group", fail)
-    with pytest.raises(RuntimeError, match="simulated failure"):
-        bpy.ops.penumbra.bake_colormap_lut()
+    native.require().testing.record_durable_steps()
+    try:
+        with pytest.raises(RuntimeError, match="simulated failure"):
+            bpy.ops.penumbra.bake_colormap_lut()
+    finally:
+        steps = native.require().testing.recorded_durable_steps()
     assert {name: (tmp_path / name).read_bytes() for name in os.listdir(tmp_path)} == files
+    # The earlier lookups were moved aside and back durably: each rename
+    # between the moved file's fsync and its folder's.
+    moves = []
+    for i, step in enumerate(steps):
+        if step.startswith("rename "):
+            source, target = step[len("rename "):].split(" -> ")
+            assert steps[i - 1:i + 2:2] == [f"fsync file {source}", f"fsync folder {os.path.dirname(target)}"], steps
+            moves.append((source, target))
+    backups = [move for move in moves if move[1].endswith(".penumbra-backup")]
+    assert backups and all((b, a) in moves[moves.index((a, b)):] for a, b in backups), moves
     assert sorted(n.name for n in tree.nodes) == nodes
     assert sorted((l.from_node.name, l.from_socket.identifier, l.to_node.name, l.to_socket.identifier)
                   for l in tree.links) == links

@@ -95,6 +95,19 @@ def test_world_mapping_rotation_is_honoured(addon, tmp_path):
     assert np.dot(np.array(d), expected) > math.cos(0.1)
 
 
+def test_the_rig_json_is_fsynced_renamed_then_its_folder_fsynced(addon, tmp_path):
+    path = write_map(str(tmp_path / "map.exr"), sky_and_sun())
+    json_path = str(tmp_path / "rig.json")
+    core_module().testing.record_durable_steps()
+    try:
+        assert bpy.ops.penumbra.build_light_rig(filepath=path, count=4, json_path=json_path) == {"FINISHED"}
+    finally:
+        steps = core_module().testing.recorded_durable_steps()
+    temporary = steps[0][len("fsync file "):]
+    assert steps == [f"fsync file {temporary}", f"rename {temporary} -> {json_path}", f"fsync folder {tmp_path}"]
+    assert os.path.dirname(temporary) == str(tmp_path) and sorted(os.listdir(tmp_path)) == ["map.exr", "rig.json"]
+
+
 def _clear_images():
     for image in list(bpy.data.images):
         bpy.data.images.remove(image)
