@@ -103,7 +103,7 @@ py::tuple shade(const vis::PoseModel& x, const Floats& joint_rotations, const Fl
     {
         py::gil_scoped_release release;
         const auto shader = shader_for(x.order);
-        result = vis::shade_pose(x, *shader, r.data(), p, n, t, nb, l, sp);
+        result = vis::shade_pose_model(x, *shader, r.data(), p, n, t, nb, l, sp);
     }
     py::dict info;
     info["seconds_pose_to_lobes"] = result.timings.pose_to_lobes;
