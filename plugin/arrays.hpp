@@ -41,6 +41,16 @@ pybind11::array_t<T> to_array(const std::vector<T>& v, std::vector<pybind11::ssi
     return out;
 }
 
+// f applied to every element: float64 of a's shape (a scalar gives a 0-d array).
+template <typename F>
+pybind11::array_t<double> map_elements(const Doubles& a, F&& f) {
+    pybind11::array_t<double> out(std::vector<pybind11::ssize_t>(a.shape(), a.shape() + a.ndim()));
+    const double* in = a.data();
+    double* o = out.mutable_data();
+    for (pybind11::ssize_t i = 0; i < a.size(); ++i) o[i] = f(in[i]);
+    return out;
+}
+
 // Eigen (rows, k) -> float64 (rows, k), or (rows,) when `flat`.
 pybind11::array_t<double> matrix_to_array(const Eigen::MatrixXd& m, bool flat = false);
 
