@@ -15,6 +15,7 @@
 #include "bindings.hpp"
 #include "enums.hpp"
 #include "visibility/mesh_frames.hpp"
+#include "visibility/order_limit.hpp"
 #include "visibility/pose_model.hpp"
 #include "visibility/visibility_bake.hpp"
 #include "visibility/zh_fit.hpp"
@@ -102,7 +103,8 @@ void bind_mesh_helpers(py::module_& m) {
 int order_of_rows(const Doubles& sh) {
     if (sh.ndim() != 2) throw py::value_error("sh must be (N, order²), got " + shape_of(sh));
     const int order = int(std::lround(std::sqrt(double(sh.shape(1)))));
-    if (order * order != sh.shape(1) || order < 1 || order > 8) throw py::value_error("sh rows need order² values");
+    if (order * order != sh.shape(1) || order < 1 || order > vis::max_sh_order)
+        throw py::value_error("sh rows need order² values");
     return order;
 }
 
@@ -133,8 +135,9 @@ py::tuple fit_zh_lobes(const Doubles& sh, int lobes, py::object reference, int i
 py::array_t<double> zh_params_to_sh(const Doubles& params) {
     if (params.ndim() != 3) throw py::value_error("params must be (N, lobes, 2 + order), got " + shape_of(params));
     const int lobes = int(params.shape(1)), order = int(params.shape(2)) - 2;
-    if (order < 1 || order > 8 || lobes < 1 || lobes > vis::max_lobes)
-        throw py::value_error("params must be (N, lobes 1..4, 2 + order 1..8)");
+    if (order < 1 || order > vis::max_sh_order || lobes < 1 || lobes > vis::max_lobes)
+        throw py::value_error("params must be (N, lobes 1.." + std::to_string(vis::max_lobes) + ", 2 + order 1.." +
+                              std::to_string(vis::max_sh_order) + ")");
     const py::ssize_t N = params.shape(0);
     std::vector<double> out(N * order * order);
     for (py::ssize_t i = 0; i < N; ++i)
@@ -169,6 +172,8 @@ void bind_zh_lobes(py::module_& m) {
 }  // namespace
 
 void bind_visibility(py::module_& m) {
+    m.attr("MAX_ORDER") = vis::max_sh_order;  // the tool's limit, not sh.MAX_ORDER (visibility/order_limit.hpp)
+    m.attr("MAX_LOBES") = vis::max_lobes;
     bind_enums(m);
     bind_visibility_training(m);
     bind_visibility_model(m);

@@ -17,6 +17,7 @@
 #include "progress.hpp"
 #include "sh/pose_shading.hpp"
 #include "visibility/model_file.hpp"
+#include "visibility/order_limit.hpp"
 #include "visibility/pose_model.hpp"
 #include "visibility/runtime_shading.hpp"
 
@@ -46,8 +47,9 @@ py::dict errors_dict(const vis::Errors& e) {
 // while Python runs.
 std::shared_ptr<const sh::PoseShader> shader_for(int order) {
     static std::mutex mutex;
-    static std::array<std::shared_ptr<const sh::PoseShader>, 9> shaders;
-    if (order < 1 || order > 8) throw penumbra::ArgumentError("SH order must be in [1, 8]");
+    static std::array<std::shared_ptr<const sh::PoseShader>, vis::max_sh_order + 1> shaders;
+    if (order < 1 || order > vis::max_sh_order)
+        throw penumbra::ArgumentError("SH order must be in [1, " + std::to_string(vis::max_sh_order) + "]");
     std::lock_guard<std::mutex> lock(mutex);
     auto& slot = shaders[std::size_t(order)];
     if (!slot) slot = std::make_shared<const sh::PoseShader>(order);
