@@ -1,5 +1,7 @@
 #include "arrays.hpp"
 
+#include <cmath>
+
 #include "common/error.hpp"
 
 namespace py = pybind11;
@@ -57,6 +59,46 @@ std::vector<Eigen::Vector3d> vectors3(const py::array& array, const char* what, 
         out[i] = d;
     }
     return out;
+}
+
+namespace {
+
+// n × n doubles, row-major, from a (n, n) array.
+template <int N>
+Eigen::Matrix<double, N, N> square_matrix(const py::handle& given, const char* what) {
+    const auto a = Doubles::ensure(given);
+    if (!a || a.ndim() != 2 || a.shape(0) != N || a.shape(1) != N)
+        throw py::value_error(std::string(what) + " must be a (" + std::to_string(N) + ", " + std::to_string(N) +
+                              ") matrix, got " + (a ? shape_of(a) : std::string("another type")));
+    Eigen::Matrix<double, N, N> m;
+    for (int i = 0; i < N; ++i)
+        for (int j = 0; j < N; ++j) m(i, j) = a.at(i, j);
+    return m;
+}
+
+}  // namespace
+
+Eigen::Matrix3d matrix3(const py::handle& a, const char* what) { return square_matrix<3>(a, what); }
+
+Eigen::Matrix4d matrix4(const py::handle& a, const char* what) { return square_matrix<4>(a, what); }
+
+Eigen::MatrixXd array_to_matrix(const Doubles& a, const char* what) {
+    if (a.ndim() != 1 && a.ndim() != 2)
+        throw py::value_error(std::string(what) + " must be 1- or 2-dimensional, got " + shape_of(a));
+    const py::ssize_t rows = a.shape(0), cols = a.ndim() == 2 ? a.shape(1) : 1;
+    Eigen::MatrixXd m(rows, cols);
+    const double* p = a.data();
+    for (py::ssize_t i = 0; i < rows; ++i)
+        for (py::ssize_t j = 0; j < cols; ++j) m(i, j) = p[i * cols + j];
+    return m;
+}
+
+int order_of_coefficient_count(py::ssize_t count, int max_order, const char* what) {
+    const int order = int(std::lround(std::sqrt(double(count))));
+    if (order < 1 || order > max_order || py::ssize_t(order) * order != count)
+        throw py::value_error(std::string(what) + " must hold order² SH coefficients (1, 4, 9, ..., " +
+                              std::to_string(max_order * max_order) + "), got " + std::to_string(count));
+    return order;
 }
 
 py::array_t<double> matrix_to_array(const Eigen::MatrixXd& m, bool flat) {

@@ -41,6 +41,29 @@ pybind11::array_t<T> to_array(const std::vector<T>& v, std::vector<pybind11::ssi
     return out;
 }
 
+// A (3, 3) or (4, 4) real matrix (a rotation, an object's transform) as
+// Eigen; anything else is a ValueError naming `what` and the shape it had.
+Eigen::Matrix3d matrix3(const pybind11::handle& a, const char* what);
+Eigen::Matrix4d matrix4(const pybind11::handle& a, const char* what);
+
+// (rows,) or (rows, k) -> Eigen (rows, k); the inverse of matrix_to_array.
+Eigen::MatrixXd array_to_matrix(const Doubles& a, const char* what);
+
+// The SH order of `count` coefficients (count = order², 1 <= order <=
+// max_order: sh::max_order for the SH engine, visibility::max_sh_order for
+// the visibility tool), or a ValueError naming `what`.
+int order_of_coefficient_count(pybind11::ssize_t count, int max_order, const char* what);
+
+// f applied to every element: float64 of a's shape (a scalar gives a 0-d array).
+template <typename F>
+pybind11::array_t<double> map_elements(const Doubles& a, F&& f) {
+    pybind11::array_t<double> out(std::vector<pybind11::ssize_t>(a.shape(), a.shape() + a.ndim()));
+    const double* in = a.data();
+    double* o = out.mutable_data();
+    for (pybind11::ssize_t i = 0; i < a.size(); ++i) o[i] = f(in[i]);
+    return out;
+}
+
 // Eigen (rows, k) -> float64 (rows, k), or (rows,) when `flat`.
 pybind11::array_t<double> matrix_to_array(const Eigen::MatrixXd& m, bool flat = false);
 

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "arrays.hpp"
 #include "bindings.hpp"
 #include "common/error.hpp"
 #include "enums.hpp"
@@ -29,12 +30,8 @@ Eigen::Vector3d vector3(const py::handle& value, const char* what) {
 LookupStep lookup_step(const py::handle& value) {
     const py::tuple step = py::cast<py::tuple>(value);
     if (step.size() != 3) throw py::value_error("a lookup step must be (A (3, 3), b (3,), normalize)");
-    const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(step[0]);
-    if (!a || a.ndim() != 2 || a.shape(0) != 3 || a.shape(1) != 3)
-        throw py::value_error("a lookup step's A must be a (3, 3) matrix");
     LookupStep out;
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) out.a(r, c) = a.at(r, c);
+    out.a = matrix3(step[0], "a lookup step's A");
     out.b = vector3(step[1], "a lookup step's b");
     out.normalize = py::cast<bool>(step[2]);
     return out;

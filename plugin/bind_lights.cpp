@@ -287,6 +287,20 @@ void bind_frame_functions(py::module_& m) {
     "Rotates an equirectangular image about +z by `angle` radians (content at d moves to Rz·d).");
 }
 
+void bind_suns(py::module_& m) {
+    m.attr("MIN_SUN_ANGLE") = min_sun_angle;
+    m.def("sun_model_for_blender", &sun_model_for_blender, py::arg("major"), py::arg("minor"),
+          "The SunModel Cycles draws suns with in Blender major.minor (BLENDER4_CONE from 4.0 on).");
+    m.def("sun_angle", [](const Doubles& spread) { return map_elements(spread, sun_angle); }, py::arg("spread"),
+          "Angle (radians, full) of the sun written for each RMS angular radius in `spread` (any shape): "
+          "clip(2√2·spread, 0, π), 0 below MIN_SUN_ANGLE.");
+    m.def("sun_strength_per_flux", [](const Doubles& angle, SunModel sun_model) {
+        return map_elements(angle, [sun_model](double a) { return sun_strength_per_flux(a, sun_model); });
+    }, py::arg("angle"), py::arg("sun_model"),
+    "Sun strength per unit of the light's flux ∫L dω for each sun angle (any shape) drawn as `sun_model`: "
+    "(1 + cos(angle/2))/2 for BLENDER4_CONE, 1 otherwise.");
+}
+
 }  // namespace
 
 void bind_lights(py::module_& m) {
@@ -294,6 +308,7 @@ void bind_lights(py::module_& m) {
     bind_sources(m);
     bind_lights_rig(m);
     bind_frame_functions(m);
+    bind_suns(m);
 }
 
 }  // namespace penumbra::bindings

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "arrays.hpp"
 #include "bind_lights.hpp"
 #include "bindings.hpp"
 #include "color/color_config.hpp"
@@ -55,13 +56,7 @@ std::unique_ptr<PyRigBuilder> make_builder(int count, SamplerKind sampler, bool 
     o.cluster_max = cluster_max;
     o.cluster_correction = cluster_correction;
     o.adaptive_tolerance = adaptive_tolerance;
-    if (!world_from_map.is_none()) {
-        auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(world_from_map);
-        if (!a || a.ndim() != 2 || a.shape(0) != 3 || a.shape(1) != 3)
-            throw ArgumentError("world_from_map must be a 3x3 rotation matrix");
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < 3; ++j) o.world_from_map(i, j) = a.at(i, j);
-    }
+    if (!world_from_map.is_none()) o.world_from_map = matrix3(world_from_map, "world_from_map");
     return std::make_unique<PyRigBuilder>(o);
 }
 

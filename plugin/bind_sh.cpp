@@ -36,34 +36,6 @@ std::vector<Eigen::Vector3d> to_directions(const Doubles& a, const char* what) {
     return out;
 }
 
-Eigen::Matrix3d to_rotation(const Doubles& a) {
-    if (a.ndim() != 2 || a.shape(0) != 3 || a.shape(1) != 3)
-        throw py::value_error("rotation must have shape (3, 3), got " + shape_of(a));
-    Eigen::Matrix3d r;
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) r(i, j) = a.at(i, j);
-    return r;
-}
-
-// (rows,) or (rows, k) -> Eigen (rows, k).
-Eigen::MatrixXd to_matrix(const Doubles& a, const char* what) {
-    if (a.ndim() != 1 && a.ndim() != 2)
-        throw py::value_error(std::string(what) + " must be 1- or 2-dimensional, got " + shape_of(a));
-    const py::ssize_t rows = a.shape(0), cols = a.ndim() == 2 ? a.shape(1) : 1;
-    Eigen::MatrixXd m(rows, cols);
-    const double* p = a.data();
-    for (py::ssize_t i = 0; i < rows; ++i)
-        for (py::ssize_t j = 0; j < cols; ++j) m(i, j) = p[i * cols + j];
-    return m;
-}
-
-int order_from_coefficient_count(py::ssize_t rows) {
-    const int order = static_cast<int>(std::lround(std::sqrt(double(rows))));
-    if (order < 1 || order > sh::max_order || py::ssize_t(order) * order != rows)
-        throw py::value_error("SH coefficients need order² rows (1, 4, 9, ..., 256), got " + std::to_string(rows));
-    return order;
-}
-
 py::array_t<double> eval(int order, const Doubles& dirs) {
     sh::check_order(order);
     const std::vector<Eigen::Vector3d> d = to_directions(dirs, "dirs");
@@ -123,7 +95,7 @@ py::array_t<double> zh_to_sh(int order, const Doubles& axes, const Doubles& band
 
 py::array_t<double> rotate_zh(const Doubles& axes, const Doubles& rotation) {
     const std::vector<Eigen::Vector3d> a = to_directions(axes, "axes");
-    const Eigen::Matrix3d r = to_rotation(rotation);
+    const Eigen::Matrix3d r = matrix3(rotation, "rotation");
     static_cast<void>(sh::ShRotation(1, r));  // validates r as a proper rotation
     Eigen::MatrixXd out(a.size(), 3);
     for (std::size_t i = 0; i < a.size(); ++i) {
@@ -135,9 +107,9 @@ py::array_t<double> rotate_zh(const Doubles& axes, const Doubles& rotation) {
 }
 
 py::array_t<double> rotate(const Doubles& coeffs, const Doubles& rotation) {
-    const Eigen::MatrixXd c = to_matrix(coeffs, "coeffs");
-    const int order = order_from_coefficient_count(c.rows());
-    const Eigen::Matrix3d r = to_rotation(rotation);
+    const Eigen::MatrixXd c = array_to_matrix(coeffs, "coeffs");
+    const int order = order_of_coefficient_count(c.rows(), sh::max_order, "coeffs");
+    const Eigen::Matrix3d r = matrix3(rotation, "rotation");
     Eigen::MatrixXd out;
     {
         py::gil_scoped_release release;
@@ -149,7 +121,7 @@ py::array_t<double> rotate(const Doubles& coeffs, const Doubles& rotation) {
 py::array_t<double> project_points(int order, const Doubles& dirs, const Doubles& values, const py::object& weights) {
     sh::check_order(order);
     const std::vector<Eigen::Vector3d> d = to_directions(dirs, "dirs");
-    const Eigen::MatrixXd v = to_matrix(values, "values");
+    const Eigen::MatrixXd v = array_to_matrix(values, "values");
     if (v.rows() != Eigen::Index(d.size()))
         throw py::value_error("values must have one row per direction (" + std::to_string(d.size()) + "), got " +
                               shape_of(values));
@@ -173,7 +145,7 @@ py::array_t<double> project_lights(int order, const Doubles& dirs, const Doubles
     const std::vector<Eigen::Vector3d> d = to_directions(dirs, "dirs");
     if (rgb.ndim() != 2 || rgb.shape(0) != py::ssize_t(d.size()) || rgb.shape(1) != 3)
         throw py::value_error("rgb must have shape (" + std::to_string(d.size()) + ", 3), got " + shape_of(rgb));
-    const Eigen::MatrixXd e = to_matrix(rgb, "rgb");
+    const Eigen::MatrixXd e = array_to_matrix(rgb, "rgb");
     Eigen::MatrixXd out;
     {
         py::gil_scoped_release release;

@@ -98,13 +98,11 @@ Inputs checked_inputs(int order, const py::array& lighting, const py::array& lob
     return Inputs{std::size_t(n), int(c), lobe_axes, lobe_bands, normals, tangents, std::nullopt};
 }
 
-Eigen::MatrixXd lighting_matrix(const py::array& lighting, py::ssize_t count) {
-    const auto light = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(lighting);
+// The (order², 3) lighting, its shape checked by checked_inputs.
+Eigen::MatrixXd lighting_matrix(const py::array& lighting) {
+    const auto light = Doubles::ensure(lighting);
     if (!light) throw py::value_error("lighting must be a real-valued array");
-    Eigen::MatrixXd l(count, 3);
-    for (py::ssize_t i = 0; i < count; ++i)
-        for (int j = 0; j < 3; ++j) l(i, j) = light.data()[3 * i + j];
-    return l;
+    return array_to_matrix(light, "lighting");
 }
 
 py::object shade_pose(int order, const py::array& lighting, const py::array& lobe_axes, const py::array& lobe_bands,
@@ -126,7 +124,7 @@ py::object shade_pose(int order, const py::array& lighting, const py::array& lob
         parameters.camera = Eigen::Vector3d((*camera)[0], (*camera)[1], (*camera)[2]);
         in.positions = *positions;
     }
-    const Eigen::MatrixXd l = lighting_matrix(lighting, sh::coefficient_count(order));
+    const Eigen::MatrixXd l = lighting_matrix(lighting);
 
     // float64 arithmetic either way; float64 buffers only when every
     // float input already is float64 (no rounding of the caller's data).

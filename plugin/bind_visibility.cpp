@@ -7,7 +7,6 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <cmath>
 #include <string>
 #include <vector>
 
@@ -15,9 +14,11 @@
 #include "bindings.hpp"
 #include "enums.hpp"
 #include "visibility/mesh_frames.hpp"
+#include "visibility/order_limit.hpp"
 #include "visibility/pose_model.hpp"
 #include "visibility/visibility_bake.hpp"
 #include "visibility/zh_fit.hpp"
+#include "visibility/zh_rows.hpp"
 
 namespace py = pybind11;
 namespace vis = penumbra::visibility;
@@ -101,9 +102,7 @@ void bind_mesh_helpers(py::module_& m) {
 // The SH order of rows of order² values, or ValueError.
 int order_of_rows(const Doubles& sh) {
     if (sh.ndim() != 2) throw py::value_error("sh must be (N, order²), got " + shape_of(sh));
-    const int order = int(std::lround(std::sqrt(double(sh.shape(1)))));
-    if (order * order != sh.shape(1) || order < 1 || order > 8) throw py::value_error("sh rows need order² values");
-    return order;
+    return order_of_coefficient_count(sh.shape(1), vis::max_sh_order, "sh rows");
 }
 
 py::tuple fit_zh_lobes(const Doubles& sh, int lobes, py::object reference, int iterations, double axis_prior) {
@@ -123,9 +122,8 @@ py::tuple fit_zh_lobes(const Doubles& sh, int lobes, py::object reference, int i
     std::vector<double> in(sh.data(), sh.data() + sh.size()), out(N * d), residual(N);
     {
         py::gil_scoped_release release;
-        for (py::ssize_t i = 0; i < N; ++i)
-            residual[i] = vis::fit_zh_lobes(s, in.data() + i * order * order,
-                                            ref.empty() ? nullptr : ref.data() + i * d, out.data() + i * d);
+        vis::fit_zh_lobes_rows(s, std::size_t(N), in.data(), ref.empty() ? nullptr : ref.data(), out.data(),
+                               residual.data());
     }
     return py::make_tuple(to_array(out, {N, lobes, vis::params_per_lobe(order)}), to_array(residual, {N}));
 }
@@ -133,12 +131,12 @@ py::tuple fit_zh_lobes(const Doubles& sh, int lobes, py::object reference, int i
 py::array_t<double> zh_params_to_sh(const Doubles& params) {
     if (params.ndim() != 3) throw py::value_error("params must be (N, lobes, 2 + order), got " + shape_of(params));
     const int lobes = int(params.shape(1)), order = int(params.shape(2)) - 2;
-    if (order < 1 || order > 8 || lobes < 1 || lobes > vis::max_lobes)
-        throw py::value_error("params must be (N, lobes 1..4, 2 + order 1..8)");
+    if (order < 1 || order > vis::max_sh_order || lobes < 1 || lobes > vis::max_lobes)
+        throw py::value_error("params must be (N, lobes 1.." + std::to_string(vis::max_lobes) + ", 2 + order 1.." +
+                              std::to_string(vis::max_sh_order) + ")");
     const py::ssize_t N = params.shape(0);
     std::vector<double> out(N * order * order);
-    for (py::ssize_t i = 0; i < N; ++i)
-        vis::lobes_to_sh(order, lobes, params.data() + i * lobes * (order + 2), out.data() + i * order * order);
+    vis::lobes_to_sh_rows(order, lobes, std::size_t(N), params.data(), out.data());
     return to_array(out, {N, py::ssize_t(order) * order});
 }
 
@@ -160,8 +158,7 @@ void bind_zh_lobes(py::module_& m) {
     m.def("ambient_occlusion", [](const Doubles& sh) {
         const int order = order_of_rows(sh);
         std::vector<double> out(sh.shape(0));
-        for (py::ssize_t i = 0; i < sh.shape(0); ++i)
-            out[i] = vis::ambient_occlusion(order, sh.data() + i * order * order);
+        vis::ambient_occlusion_rows(order, out.size(), sh.data(), out.data());
         return to_array(out, {sh.shape(0)});
     }, py::arg("sh"), "Cosine-weighted visibility (AO) √(4π)(T_diffuse v)_00 of SH visibility vectors.");
 }
@@ -169,6 +166,8 @@ void bind_zh_lobes(py::module_& m) {
 }  // namespace
 
 void bind_visibility(py::module_& m) {
+    m.attr("MAX_ORDER") = vis::max_sh_order;  // the tool's limit, not sh.MAX_ORDER (visibility/order_limit.hpp)
+    m.attr("MAX_LOBES") = vis::max_lobes;
     bind_enums(m);
     bind_visibility_training(m);
     bind_visibility_model(m);

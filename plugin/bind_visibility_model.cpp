@@ -17,6 +17,8 @@
 #include "progress.hpp"
 #include "sh/pose_shading.hpp"
 #include "visibility/model_file.hpp"
+#include "visibility/model_statistics.hpp"
+#include "visibility/order_limit.hpp"
 #include "visibility/pose_model.hpp"
 #include "visibility/runtime_shading.hpp"
 
@@ -46,8 +48,9 @@ py::dict errors_dict(const vis::Errors& e) {
 // while Python runs.
 std::shared_ptr<const sh::PoseShader> shader_for(int order) {
     static std::mutex mutex;
-    static std::array<std::shared_ptr<const sh::PoseShader>, 9> shaders;
-    if (order < 1 || order > 8) throw penumbra::ArgumentError("SH order must be in [1, 8]");
+    static std::array<std::shared_ptr<const sh::PoseShader>, vis::max_sh_order + 1> shaders;
+    if (order < 1 || order > vis::max_sh_order)
+        throw penumbra::ArgumentError("SH order must be in [1, " + std::to_string(vis::max_sh_order) + "]");
     std::lock_guard<std::mutex> lock(mutex);
     auto& slot = shaders[std::size_t(order)];
     if (!slot) slot = std::make_shared<const sh::PoseShader>(order);
@@ -59,10 +62,7 @@ Eigen::MatrixXd lighting_sh(const Doubles& lighting, int order) {
     const py::ssize_t n_sh = py::ssize_t(order) * order;
     if (lighting.ndim() != 2 || lighting.shape(0) != n_sh || lighting.shape(1) != 3)
         throw py::value_error("lighting must have shape (" + std::to_string(n_sh) + ", 3), got " + shape_of(lighting));
-    Eigen::MatrixXd l(n_sh, 3);
-    for (py::ssize_t i = 0; i < n_sh; ++i)
-        for (int c = 0; c < 3; ++c) l(i, c) = lighting.at(i, c);
-    return l;
+    return array_to_matrix(lighting, "lighting");
 }
 
 sh::ShadingParameters shading_parameters(sh::ShadingModel model, double phong_exponent,
@@ -103,7 +103,7 @@ py::tuple shade(const vis::PoseModel& x, const Floats& joint_rotations, const Fl
     {
         py::gil_scoped_release release;
         const auto shader = shader_for(x.order);
-        result = vis::shade_pose(x, *shader, r.data(), p, n, t, nb, l, sp);
+        result = vis::shade_pose_model(x, *shader, r.data(), p, n, t, nb, l, sp);
     }
     py::dict info;
     info["seconds_pose_to_lobes"] = result.timings.pose_to_lobes;
@@ -151,11 +151,7 @@ py::tuple shade_frame(const vis::PoseModel& x, const vis::RuntimeMesh& mesh, con
     const auto r = rotations(joint_rotations, x.joints.size(), "joint_rotations");
     const std::size_t V = x.vertex_count;
     const float* p = positions_of(positions, V);
-    if (world.ndim() != 2 || world.shape(0) != 4 || world.shape(1) != 4)
-        throw py::value_error("world must be a 4 × 4 matrix, got " + shape_of(world));
-    Eigen::Matrix4d w;
-    for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) w(i, j) = world.at(i, j);
+    const Eigen::Matrix4d w = matrix4(world, "world");
     const Eigen::MatrixXd l = lighting_sh(lighting, x.order);
     const sh::ShadingParameters sp = shading_parameters(model, phong_exponent, camera, transmission, threads);
     auto rgba = output_array(rgba_out, {py::ssize_t(V), 4}, "rgba_out");
@@ -216,14 +212,9 @@ void bind_properties(py::class_<vis::PoseModel, Model>& c) {
             for (const auto& [k, v] : x.summary) d[py::str(k)] = v;
             return d;
         })
-        .def_property_readonly("constant_vertices", [](const vis::PoseModel& x) {
-            std::size_t n = 0;
-            for (std::size_t v = 0; v < x.vertex_count; ++v) n += x.joint_offsets[v] == x.joint_offsets[v + 1];
-            return n;
-        })
+        .def_property_readonly("constant_vertices", &vis::constant_vertex_count)
         .def("joints_per_vertex", [](const vis::PoseModel& x) {
-            std::vector<std::uint32_t> n(x.vertex_count);
-            for (std::size_t v = 0; v < x.vertex_count; ++v) n[v] = x.joint_offsets[v + 1] - x.joint_offsets[v];
+            const std::vector<std::uint32_t> n = vis::joints_per_vertex(x);
             return to_array(n, {py::ssize_t(n.size())});
         });
 }

@@ -84,10 +84,17 @@ SunModel sun_model_for_blender(int major, int /*minor*/) {
     return major >= 4 ? SunModel::blender4_cone : SunModel::blender3_disc;
 }
 
-double sun_half_angle(double spread) {
+double sun_angle(double spread) {
     if (!(spread > 0.0)) return 0.0;
     const double angle = std::min(2.0 * std::numbers::sqrt2 * spread, pi);
-    return angle < min_sun_angle ? 0.0 : 0.5 * angle;
+    return angle < min_sun_angle ? 0.0 : angle;
+}
+
+double sun_half_angle(double spread) { return 0.5 * sun_angle(spread); }
+
+double sun_strength_per_flux(double angle, SunModel model) {
+    if (model != SunModel::blender4_cone) return 1.0;
+    return 0.5 * (1.0 + std::cos(0.5 * angle));
 }
 
 double sun_kernel(double c, double h, SunModel model) {

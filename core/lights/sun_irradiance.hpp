@@ -1,12 +1,16 @@
-// Irradiance of one Blender sun on a diffuse surface: the analytic disc model
-// the irradiance fit (irradiance_fit.hpp) and the benchmark use, matching how
-// the add-on writes a light as a sun (addon/penumbra/lights/rig_objects.py and
-// docs/lights.md, "Suns in Cycles").
+// A light written as a Blender sun, and the irradiance that sun gives a
+// diffuse surface. This file owns how a light becomes a sun (its angle and
+// its strength, which the add-on writes through _penumbra.lights.sun_angle
+// and sun_strength_per_flux, addon/penumbra/lights/rig_objects.py) and the
+// analytic model of what Cycles then draws, which the irradiance fit
+// (irradiance_fit.hpp) and the benchmark use (docs/lights.md, "Suns in
+// Cycles").
 //
 // A light of flux rgb (= ∫ L dω of its region) and spread σ (RMS angular
-// radius of its region) becomes a sun of angle clip(2√2·σ, 0, π), written as
-// 0 below 1e-6 rad; its half-angle is h = angle/2. How Cycles spreads that
-// flux over the half-angle h around the sun's direction d:
+// radius of its region; a uniform disc of radius ρ has RMS radius ρ/√2)
+// becomes a sun of angle clip(2√2·σ, 0, π), written as 0 below 1e-6 rad;
+// its half-angle is h = angle/2. How Cycles spreads that flux over the
+// half-angle h around the sun's direction d:
 //   point          h = 0: all of it along d (also the old irradiance()).
 //   blender3_disc  Blender 3.x: a disc of radius tan h at unit distance,
 //                  sampled uniformly by area, so the flux per solid angle is
@@ -34,12 +38,26 @@ namespace penumbra::lights {
 SunModel sun_model_for_blender(int major, int minor);
 
 // Suns narrower than this (radians, full angle) are written with angle 0:
-// Cycles drops a sun of angle <= 1e-10 (its cone pdf overflows a float).
+// Cycles drops a sun of angle <= 1e-10 (its cone pdf overflows a float), and
+// a one-pixel region's RMS radius is rounding noise (~1e-16); 1e-6 is far
+// below a pixel of any map the tool reads (2π/65536 ≈ 1e-4).
 constexpr double min_sun_angle = 1e-6;
 
-// Half-angle h (radians) of the sun the add-on writes for a region of RMS
-// angular radius `spread`.
+// Angle (radians, full angular diameter) of the sun the add-on writes for a
+// region of RMS angular radius `spread`: clip(2√2·spread, 0, π), 0 below
+// min_sun_angle.
+double sun_angle(double spread);
+
+// Half-angle h = sun_angle(spread)/2.
 double sun_half_angle(double spread);
+
+// The sun's strength (Blender's W/m²) per unit of the light's flux ∫L dω, for
+// a sun of `angle` drawn as `model`, so that the sun carries the flux:
+// blender4_cone makes the strength the irradiance on a facing surface, and
+// its cone carries strength·2/(1 + cos h), hence (1 + cos h)/2; blender3_disc
+// makes the strength the disc's ∫L dω, hence 1; a point sun (angle 0) is 1
+// in both.
+double sun_strength_per_flux(double angle, SunModel model);
 
 // K(c, h): irradiance per unit flux, c = cos β clamped to [−1, 1].
 double sun_kernel(double c, double half_angle, SunModel model);

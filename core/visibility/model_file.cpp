@@ -115,7 +115,7 @@ PoseModel read_pose_model(const std::string& path) {
     m.rays = int(r.get<std::uint32_t>());
     const auto below = r.get<std::uint32_t>();
     const auto features = r.get<std::uint32_t>();
-    if (m.order < 1 || m.order > 8 || m.lobes < 1 || m.lobes > max_lobes || below > 1 || features > 1)
+    if (m.order < 1 || m.order > max_sh_order || m.lobes < 1 || m.lobes > max_lobes || below > 1 || features > 1)
         r.fail("order, lobes or kinds out of range");
     m.below_horizon = BelowHorizon(below);
     m.features = PoseFeatures(features);

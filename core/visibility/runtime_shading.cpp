@@ -16,10 +16,11 @@
 
 namespace penumbra::visibility {
 
-RuntimeResult shade_pose(const PoseModel& model, const sh::PoseShader& shader, const float* joint_rotations,
-                         const std::vector<float>& positions, const std::vector<float>& normals,
-                         const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>& neighbours,
-                         const Eigen::MatrixXd& lighting, const sh::ShadingParameters& parameters) {
+RuntimeResult shade_pose_model(const PoseModel& model, const sh::PoseShader& shader, const float* joint_rotations,
+                               const std::vector<float>& positions, const std::vector<float>& normals,
+                               const std::vector<std::uint32_t>& triangles,
+                               const std::vector<std::uint32_t>& neighbours, const Eigen::MatrixXd& lighting,
+                               const sh::ShadingParameters& parameters) {
     using Clock = std::chrono::steady_clock;
     const std::size_t V = model.vertex_count;
     if (positions.size() != 3 * V || normals.size() != 3 * V)

@@ -11,8 +11,10 @@
 //    per-vertex step (normal, frame, lobes, shade, clamp) fused into one
 //    parallel pass over blocks of vertices that stay in cache, writing the
 //    point attributes' layout (RGBA) directly;
-//  - shade_pose, the same shading from world-space normals the caller
-//    supplies, in separate passes (kept for callers with their own normals).
+//  - shade_pose_model, the same shading of the model's pose from world-space
+//    normals the caller supplies, in separate passes (kept for callers with
+//    their own normals; bound as PoseModel.shade). Not _penumbra.sh.shade_pose,
+//    which runs the SH engine's PoseShader on lobes the caller already has.
 #pragma once
 
 #include <cstdint>
@@ -52,10 +54,11 @@ struct RuntimeResult {
 // positions and normals: V × 3 world space of the deformed mesh; triangles and
 // neighbours as at bake time (reference_neighbours); lighting (order², 3).
 // The shader's order must equal the model's. ArgumentError on size mismatch.
-RuntimeResult shade_pose(const PoseModel& model, const sh::PoseShader& shader, const float* joint_rotations,
-                         const std::vector<float>& positions, const std::vector<float>& normals,
-                         const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>& neighbours,
-                         const Eigen::MatrixXd& lighting, const sh::ShadingParameters& parameters);
+RuntimeResult shade_pose_model(const PoseModel& model, const sh::PoseShader& shader, const float* joint_rotations,
+                               const std::vector<float>& positions, const std::vector<float>& normals,
+                               const std::vector<std::uint32_t>& triangles,
+                               const std::vector<std::uint32_t>& neighbours, const Eigen::MatrixXd& lighting,
+                               const sh::ShadingParameters& parameters);
 
 // What shade_frame keeps of a mesh from frame to frame: its polygons and
 // reference neighbours (the bake's).
@@ -81,7 +84,7 @@ struct FrameResult {
     RuntimeTimings timings;
 };
 
-// One frame: joint_rotations as for shade_pose; positions V × 3 in object
+// One frame: joint_rotations as for shade_pose_model; positions V × 3 in object
 // space (the evaluated mesh's); world the object's 4 × 4 matrix (normals
 // go by its inverse transpose; a singular one leaves them as they are).
 // Writes rgba_out (V × 4: scene-linear RGB clamped to ≥ 0, alpha 1) and

@@ -20,6 +20,7 @@
 #include "common/progress.hpp"
 #include "visibility/mesh_frames.hpp"
 #include "visibility/occlusion_scene.hpp"
+#include "visibility/order_limit.hpp"
 
 namespace penumbra::visibility {
 
@@ -37,7 +38,7 @@ enum class Weighting : std::uint32_t {
 struct BakeSettings {
     int order = 4;          // SH order (bands 0..order−1)
     int rays = 256;         // directions over the whole sphere (spherical Fibonacci)
-    static constexpr Range<int> order_range{1, 8};
+    static constexpr Range<int> order_range{1, max_sh_order};
     static constexpr Range<int> rays_range{4, 65536};
     BelowHorizon below_horizon = BelowHorizon::Occluded;
     Weighting weighting = Weighting::Plain;

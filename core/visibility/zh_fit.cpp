@@ -15,17 +15,19 @@
 #include "common/error.hpp"
 #include "sh/basis.hpp"
 #include "sh/point_sets.hpp"
+#include "visibility/order_limit.hpp"
 
 namespace penumbra::visibility {
 
 namespace {
 
-constexpr int max_fit_order = 8;
+constexpr int max_fit_order = max_sh_order;
 constexpr int max_sh = max_fit_order * max_fit_order;
 
 void check(const ZhFitSettings& s) {
     if (s.order < 1 || s.order > max_fit_order)
-        throw ArgumentError("ZH fit order must be in [1, 8], got " + std::to_string(s.order));
+        throw ArgumentError("ZH fit order must be in [1, " + std::to_string(max_fit_order) + "], got " +
+                            std::to_string(s.order));
     if (s.lobes < 1 || s.lobes > max_lobes)
         throw ArgumentError("lobes must be in [1, 4], got " + std::to_string(s.lobes));
     if (s.iterations < 0) throw ArgumentError("iterations must be >= 0");

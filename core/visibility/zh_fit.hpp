@@ -37,7 +37,7 @@ namespace penumbra::visibility {
 constexpr int max_lobes = 4;
 
 struct ZhFitSettings {
-    int order = 4;             // SH order of the data (1..8)
+    int order = 4;             // SH order of the data (1..max_sh_order, order_limit.hpp)
     int lobes = 2;             // c, 1..4
     int iterations = 8;        // Levenberg–Marquardt iterations
     double axis_prior = 1.0;   // weight of the pull towards the reference axes, relative to |sh|² (docs/visibility.md)

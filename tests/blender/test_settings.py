@@ -1,8 +1,9 @@
 """The add-on's properties take their defaults and ranges from the core: every
 property below, as Blender registered it, has the default and the hard
 bounds that _penumbra.settings_spec() reads from the core's settings structs.
-A value typed differently in the add-on (addon/penumbra/core_settings.py) or
-in an operator fails here."""
+A property or operator that types its own value instead of taking
+addon/penumbra/core_settings.py's fails here, and so do core_settings.py's
+defaults for registering without the core once they differ from the core's."""
 
 import math
 
@@ -85,3 +86,20 @@ def test_the_property_has_the_cores_default_and_range(spec, where, name, setting
 
 def test_every_core_setting_is_mirrored_somewhere(spec):
     assert {setting for _, _, setting in MIRRORS} == set(spec)
+
+
+def test_the_defaults_without_the_core_are_the_cores(spec):
+    from penumbra import core_settings
+    assert set(core_settings.DEFAULTS_WITHOUT_CORE) == set(spec)
+    for name, default in core_settings.DEFAULTS_WITHOUT_CORE.items():
+        assert default == pytest.approx(spec[name]["default"]), name
+
+
+def test_the_sh_order_stops_at_the_visibility_tools_limit_not_the_sh_engines(spec):
+    from penumbra import native
+    core = native.require()
+    limit = core.visibility.MAX_ORDER
+    assert limit < core.sh.MAX_ORDER  # two limits (core/visibility/order_limit.hpp says why)
+    assert spec["visibility.sh_order"]["max"] == limit
+    for where in ("object.visibility", "operator.bake_visibility"):
+        assert rna_property(where, "sh_order").hard_max == limit

@@ -123,7 +123,7 @@ class _Job:
             temporal_filter=op.temporal_filter, frames_per_second=self.fps, cluster_max=op.cluster_max,
             adaptive_tolerance=op.adaptive_tolerance, world_from_map=self.world_from_map,
             fit_irradiance=op.fit_irradiance, tracking=op.tracking, filter_brightness=op.filter_brightness,
-            sun_model="BLENDER4_CONE" if rig_objects.cone_uniform_suns() else "BLENDER3_DISC")
+            sun_model=rig_objects.sun_model())
         self.done = 0
 
     def _check_colorspace(self, name):

@@ -2,56 +2,32 @@
 and one sun per light index, created once and updated on every rebuild.
 
 A sun shines along its local -Z axis, so its rotation takes +Z to the
-direction towards the light. Strength (W/m², irradiance on a surface facing
-the sun) and colour are split from the light's RGB irradiance as
-strength = k·max(rgb), colour = rgb / max(rgb). The sun's angle (angular
-diameter) is 2·√2 times the RMS angular radius of the region or cluster the
-light stands for (a uniform disc of radius ρ has RMS radius ρ/√2).
-
-Two Cycles facts shape the values (measured in Blender 3.4 and 4.5, see
-docs/lights.md "Suns in Cycles"):
-- A sun whose angle is positive but tiny (about 1e-10 rad or less; a
-  one-pixel region's RMS radius is rounding noise, ~1e-16) gives no light
-  at all: its cone pdf overflows 32-bit floats. Angles below MIN_SUN_ANGLE
-  are written as 0 (a point-like sun).
-- Blender 4.x Cycles spreads a sun of half-angle h as a cone of uniform
-  radiance whose irradiance on a facing surface equals the strength, so the
-  cone carries ∫L dω = strength·2/(1 + cos h); 3.4 samples a disc whose
-  ∫L dω equals the strength. k = (1 + cos h)/2 on 4.x and 1 before, so the
-  sun always carries the region's ∫L dω = rgb."""
-
-import math
+direction towards the light. Colour is rgb / max(rgb); the sun's angle and
+its strength per unit of the light's ∫L dω are the core's
+(core/lights/sun_irradiance.hpp, through _penumbra.lights.sun_angle and
+sun_strength_per_flux), the same rule the irradiance fit assumes: the angle
+is 2·√2 times the region's RMS angular radius, 0 when tiny (Cycles renders
+a sun of angle ~1e-10 rad or less black), and the strength depends on how
+this Blender's Cycles draws a sun (docs/lights.md "Suns in Cycles"), which
+the core's sun_model_for_blender picks from bpy.app.version."""
 
 import bpy
 import mathutils
 import numpy as np
 
+from .. import native
 from . import rig_index
 
 INDEX_KEY = "penumbra_light_index"
 ROOT_KEY = "penumbra_light_rig_root"
 COLLECTION_NAME = "Penumbra Light Rig"
 LINEAR = 1  # FCurve keyframe interpolation enum value of 'LINEAR'
-# Suns narrower than this (radians) are written with angle 0. Cycles drops a
-# sun of angle <= 1e-10 (float overflow of its cone pdf); 1e-6 rad is far
-# below a pixel of any map the tool reads (2π/65536 ≈ 1e-4).
-MIN_SUN_ANGLE = 1e-6
 
 
-def cone_uniform_suns(version=None):
-    """True where Cycles' sun is a uniform-radiance cone normalized to the
-    irradiance on a facing surface (Blender 4.0 on; 3.x samples a disc
-    normalized to its ∫L dω)."""
-    return tuple(bpy.app.version if version is None else version) >= (4, 0, 0)
-
-
-def strength_per_flux(angle, version=None):
-    """Blender sun strength per unit of the light's ∫L dω (rgb) at the
-    given angle (radians, array or scalar)."""
-    angle = np.asarray(angle, dtype=float)
-    if not cone_uniform_suns(version):
-        return np.ones_like(angle)
-    return 0.5 * (1.0 + np.cos(0.5 * angle))
+def sun_model(version=None):
+    """The _penumbra.lights.SunModel this Blender's Cycles (or `version`'s) draws suns with."""
+    major, minor = tuple(bpy.app.version if version is None else version)[:2]
+    return native.require().lights.sun_model_for_blender(major, minor)
 
 
 def sun_quaternions(directions):
@@ -129,9 +105,9 @@ class _Values:
         self.n_frames = rgb.shape[0]
         peak = rgb.max(axis=2)                                 # (F, S)
         self.colour = np.where(peak[..., None] > 0, rgb / np.maximum(peak[..., None], 1e-30), 1.0)
-        angle = np.clip(2.0 * math.sqrt(2.0) * spread, 0.0, math.pi)
-        self.angle = np.where(angle < MIN_SUN_ANGLE, 0.0, angle)
-        self.strength = peak * strength_per_flux(self.angle)
+        lights = native.require().lights
+        self.angle = lights.sun_angle(spread)
+        self.strength = peak * lights.sun_strength_per_flux(self.angle, sun_model())
         strongest = shadowed_indices(power.mean(axis=0))
         self.shadow = [(k in strongest) if limit_shadows else True for k in range(self.slots)]
         self.quats = [sun_quaternions(directions[:, k]) for k in range(self.slots)]

@@ -34,8 +34,11 @@ import numpy as np
 
 from .. import native
 
-MAX_ORDER = 8   # the core's visibility.sh_order range
-MAX_LOBES = 4   # the core's visibility.lobes range
+# The largest model a bake makes, and so the largest the preview draws: the
+# core's limits (core/visibility/order_limit.hpp, zh_fit.hpp). None without
+# the compiled core, when there is no model to draw.
+MAX_ORDER = native.module.visibility.MAX_ORDER if native.module else None
+MAX_LOBES = native.module.visibility.MAX_LOBES if native.module else None
 MODELS = ("diffuse", "phong", "translucent")
 
 
@@ -172,6 +175,7 @@ def lobe_vec4_count(order, lobes):
 
 def check_configuration(order, lobes, model):
     """ValueError unless the preview can draw this model (see the module's limits)."""
+    native.require()
     if not 1 <= order <= MAX_ORDER:
         raise ValueError(f"the GPU preview draws SH orders 1 to {MAX_ORDER}, the model has order {order}")
     if not 1 <= lobes <= MAX_LOBES:

@@ -346,6 +346,33 @@ def test_a_one_pixel_region_gives_a_sun_that_lights(addon, tmp_path):
     assert sun.data.angle == 0.0
 
 
+def test_the_suns_written_have_the_cores_angle_and_carry_their_lights_flux(addon):
+    """The add-on's suns against the core's rule (core/lights/sun_irradiance.hpp,
+    what the irradiance fit assumes): angle from the spread, clipped to π and 0
+    when tiny, and a strength that makes each sun carry its light's ∫L dω as
+    this Blender's Cycles draws it (_sun_rgb, the conventions measured in
+    docs/lights.md), with the cone from 4.0 on."""
+    from penumbra.lights import rig_objects
+    scene = addon
+    lights = _core().lights
+    spread = np.array([[0.0, 5.7e-17, 0.02, 0.3, 0.9, 3.0]])
+    slots = spread.shape[1]
+    rgb = np.linspace(0.5, 3.0, 3 * slots).reshape(1, slots, 3)
+    directions = np.tile([0.0, 0.6, 0.8], (1, slots, 1))
+    rig = {"slots": slots, "rgb": rgb, "directions": directions, "spread": spread, "power": rgb.mean(axis=2)}
+    rig_objects.write_rig(scene, scene.penumbra.light_rig, rig, 1, False).commit()
+    suns = sorted((o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"),
+                  key=lambda o: o[rig_objects.INDEX_KEY])
+    expected_model = "BLENDER4_CONE" if bpy.app.version >= (4, 0, 0) else "BLENDER3_DISC"
+    assert rig_objects.sun_model().name == expected_model
+    angle = np.array([o.data.angle for o in suns])
+    np.testing.assert_allclose(angle, lights.sun_angle(spread[0]), rtol=1e-6, atol=0)  # float32 in Blender
+    assert angle[0] == angle[1] == 0.0 and angle[-1] == pytest.approx(math.pi)
+    strength = rgb[0].max(axis=1) * lights.sun_strength_per_flux(angle, expected_model)
+    np.testing.assert_allclose([o.data.energy for o in suns], strength, rtol=1e-6)
+    np.testing.assert_allclose([_sun_rgb(o) for o in suns], rgb[0], rtol=1e-5)
+
+
 def _fail_after(monkeypatch, n):
     """Makes the add-on's per-sun writer raise after `n` suns."""
     from penumbra.lights import rig_objects

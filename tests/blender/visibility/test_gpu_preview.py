@@ -118,6 +118,11 @@ def test_unregister_removes_the_draw_callback_and_the_handlers(factory_scene):
 
 
 def test_the_shader_is_written_for_every_model_a_bake_can_make_and_others_are_refused(addon):
+    # The preview's limits are the core's (core/visibility/order_limit.hpp).
+    core = native.require()
+    assert (preview_shader.MAX_ORDER, preview_shader.MAX_LOBES) == (core.visibility.MAX_ORDER,
+                                                                    core.visibility.MAX_LOBES)
+    assert core.settings_spec()["visibility.lobes"]["max"] == core.visibility.MAX_LOBES
     for order in range(1, preview_shader.MAX_ORDER + 1):
         for lobes in range(1, preview_shader.MAX_LOBES + 1):
             # Inputs within the 16 vertex attributes OpenGL guarantees.
@@ -127,10 +132,10 @@ def test_the_shader_is_written_for_every_model_a_bake_can_make_and_others_are_re
                     source = preview_shader.vertex_source(order, lobes, model, readback)
                     assert source.count("{") == source.count("}")
                     assert ("gl_VertexID" in source) == readback
-    with pytest.raises(ValueError, match="orders 1 to 8"):
-        preview_shader.check_configuration(9, 2, "diffuse")
-    with pytest.raises(ValueError, match="1 to 4 lobes"):
-        preview_shader.check_configuration(4, 5, "diffuse")
+    with pytest.raises(ValueError, match=f"orders 1 to {core.visibility.MAX_ORDER}"):
+        preview_shader.check_configuration(core.visibility.MAX_ORDER + 1, 2, "diffuse")
+    with pytest.raises(ValueError, match=f"1 to {core.visibility.MAX_LOBES} lobes"):
+        preview_shader.check_configuration(4, core.visibility.MAX_LOBES + 1, "diffuse")
     with pytest.raises(ValueError, match="BRDFs"):
         preview_shader.check_configuration(4, 2, "ward")
 

@@ -46,10 +46,24 @@ TEST(LightsSunIrradiance, facing_irradiance_follows_blenders_conventions) {
     }
 }
 
-TEST(LightsSunIrradiance, half_angle_follows_the_addons_sun_angle) {
+// The add-on writes these values (tests/blender/lights/test_lights.py checks
+// the suns it writes against the core); here, the rule itself.
+TEST(LightsSunIrradiance, sun_angle_is_two_root_two_spread_clipped_to_pi_and_zero_when_tiny) {
+    EXPECT_DOUBLE_EQ(sun_angle(0.1), 2.0 * std::sqrt(2.0) * 0.1);  // a disc of radius ρ has RMS radius ρ/√2
     EXPECT_DOUBLE_EQ(sun_half_angle(0.1), std::sqrt(2.0) * 0.1);
-    EXPECT_DOUBLE_EQ(sun_half_angle(10.0), 0.5 * pi);   // angle clipped to π
-    EXPECT_DOUBLE_EQ(sun_half_angle(1.6e-16), 0.0);     // below 1e-6 rad: written as 0
+    EXPECT_DOUBLE_EQ(sun_angle(10.0), pi);          // clipped to π
+    EXPECT_DOUBLE_EQ(sun_angle(1.6e-16), 0.0);      // below 1e-6 rad: written as 0
+    EXPECT_DOUBLE_EQ(sun_angle(-1.0), 0.0);
+}
+
+TEST(LightsSunIrradiance, strength_per_flux_is_the_cones_facing_irradiance_and_1_for_the_disc) {
+    // 4.x: the strength is the sun's facing irradiance, flux·K(1, h); 3.x: the disc's flux.
+    for (double angle : {0.0, 0.2, 1.6, pi}) {
+        EXPECT_NEAR(sun_strength_per_flux(angle, SunModel::blender4_cone),
+                    sun_kernel(1.0, 0.5 * angle, SunModel::blender4_cone), 1e-9);
+        EXPECT_DOUBLE_EQ(sun_strength_per_flux(angle, SunModel::blender3_disc), 1.0);
+        EXPECT_DOUBLE_EQ(sun_strength_per_flux(angle, SunModel::point), 1.0);
+    }
 }
 
 TEST(LightsSunIrradiance, slope_matches_a_wide_difference_quotient) {

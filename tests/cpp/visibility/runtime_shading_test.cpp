@@ -202,7 +202,7 @@ FrameCase frame_case(std::mt19937_64& rng, sh::ShadingModel shading) {
 }
 
 // One model of shading on the current target: shade_frame against
-// shade_pose given the same normals (the rule's, moved to world space
+// shade_pose_model given the same normals (the rule's, moved to world space
 // here) and world positions.
 void expect_fused_frame_matches_separate_passes(std::mt19937_64& rng, sh::ShadingModel shading,
                                                 const std::string& target) {
@@ -225,8 +225,8 @@ void expect_fused_frame_matches_separate_passes(std::mt19937_64& rng, sh::Shadin
             world_normals[3 * v + k] = float(n[k]);
         }
     }
-    const RuntimeResult separate = shade_pose(c.model, shader, c.rotations.data(), world_positions, world_normals,
-                                              {}, mesh.neighbours, c.lighting, c.parameters);
+    const RuntimeResult separate = shade_pose_model(c.model, shader, c.rotations.data(), world_positions,
+                                                    world_normals, {}, mesh.neighbours, c.lighting, c.parameters);
     EXPECT_EQ(fused.stats.invalid_vertices, separate.stats.invalid_vertices);
     double largest = 0.0, scale = 0.0;
     bool clamped = false;
@@ -242,7 +242,7 @@ void expect_fused_frame_matches_separate_passes(std::mt19937_64& rng, sh::Shadin
         largest = std::max(largest, double(std::abs(ao[v] - expected_ao)));
     }
     // The same float kernel; the frames differ by float rounding only
-    // (float lanes here, double in shade_pose's vertex_frames).
+    // (float lanes here, double in shade_pose_model's vertex_frames).
     EXPECT_LT(largest, 2e-5 * scale) << target << " " << int(shading);
     EXPECT_GT(scale, 0.1);
     if (shading == sh::ShadingModel::phong) {

@@ -84,6 +84,24 @@ def test_uniform_sky_gives_pi_times_radiance():
     assert abs(e[:, 0].mean() / (2 * math.pi) - 1) < 0.02
 
 
+def test_sun_angle_and_strength_per_flux_work_on_arrays_of_any_shape():
+    """The bindings the add-on writes its suns with (rig_objects.py), against
+    the rule in closed form (docs/lights.md "Suns in Cycles")."""
+    L = _penumbra.lights
+    spread = np.array([[0.0, 1.6e-16, -1.0], [0.1, 0.5, 4.0]])
+    angle = L.sun_angle(spread)
+    assert angle.shape == spread.shape
+    np.testing.assert_array_equal(angle[0], 0.0)
+    np.testing.assert_allclose(angle[1], [0.2 * math.sqrt(2.0), math.sqrt(2.0), math.pi], rtol=1e-15)
+    assert float(L.sun_angle(0.1)) == pytest.approx(0.2 * math.sqrt(2.0))
+    assert 0.0 < L.MIN_SUN_ANGLE < 1e-4  # far below a pixel of any map, far above where Cycles drops a sun
+    np.testing.assert_allclose(L.sun_strength_per_flux(angle, "BLENDER4_CONE"), 0.5 * (1.0 + np.cos(angle / 2)))
+    for model in (L.SunModel.BLENDER3_DISC, "POINT"):
+        np.testing.assert_array_equal(L.sun_strength_per_flux(angle, model), np.ones_like(angle))
+    assert [L.sun_model_for_blender(*v).name for v in ((3, 4), (3, 6), (4, 0), (4, 5), (5, 2))] == \
+        ["BLENDER3_DISC"] * 2 + ["BLENDER4_CONE"] * 3
+
+
 def test_bad_input_is_a_clear_error():
     good = videos.sky(8, 16)
     with pytest.raises(ValueError, match="at least 1"):

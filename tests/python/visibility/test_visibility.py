@@ -79,6 +79,23 @@ def test_bad_shapes_are_value_errors():
         p.visibility.TrainingSet(3, 0, [], rays=1)
 
 
+def test_the_visibility_order_limit_is_the_bake_settings_and_every_bindings():
+    limit = p.visibility.MAX_ORDER
+    assert limit < p.sh.MAX_ORDER  # the SH engine's own limit is another (core/visibility/order_limit.hpp)
+    assert p.settings_spec()["visibility.sh_order"]["max"] == limit
+    p.visibility.TrainingSet(3, 0, [], order=limit)
+    with pytest.raises(ValueError, match="SH order"):
+        p.visibility.TrainingSet(3, 0, [], order=limit + 1)
+    within, beyond = np.zeros((1, limit ** 2)), np.zeros((1, (limit + 1) ** 2))
+    assert p.visibility.ambient_occlusion(within).shape == (1,)
+    for call in (p.visibility.ambient_occlusion, p.visibility.fit_zh_lobes):
+        with pytest.raises(ValueError, match=rf"{limit ** 2}\), got {(limit + 1) ** 2}"):
+            call(beyond)
+    assert p.visibility.zh_params_to_sh(np.zeros((1, 1, 2 + limit))).shape == (1, limit ** 2)
+    with pytest.raises(ValueError, match=f"order 1..{limit}"):
+        p.visibility.zh_params_to_sh(np.zeros((1, 1, 3 + limit)))
+
+
 def test_progress_false_cancels_and_keeps_the_set_unchanged():
     positions, normals, tris, _ = two_sphere_character()
     nb = p.visibility.reference_neighbours(len(positions), np.array([], dtype=np.int64), tris.ravel())
