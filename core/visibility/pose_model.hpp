@@ -218,8 +218,8 @@ void synthesize_params(const PoseModel& model, const float* joint_rotations, flo
 // ArgumentError for a non-finite rotation), then the parameters of vertices
 // [begin, end), written from params_out[0] on.
 std::vector<float> pose_features(const PoseModel& model, const float* joint_rotations);
-void synthesize_range(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out);
+void synthesize_params_range(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
+                             float* params_out);
 // The same as rows: parameter i of vertex v at params_out[i · stride + v −
 // begin] (stride ≥ end − begin).
 void synthesize_rows(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,

@@ -453,8 +453,8 @@ struct Accumulator {
 };
 
 template <int D>
-void synthesize_fixed(const PoseBlocks& b, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out, std::size_t stride) {
+void apply_pose_blocks_fixed(const PoseBlocks& b, const float* features, std::size_t begin, std::size_t end,
+                             float* params_out, std::size_t stride) {
     static_assert(D % 4 == 0);
     const std::uint16_t* w = b.weights + b.weight_offsets[begin];
     for (std::size_t v = begin; v < end; ++v) {
@@ -478,8 +478,8 @@ void synthesize_fixed(const PoseBlocks& b, const float* features, std::size_t be
     }
 }
 
-void synthesize_any(const PoseBlocks& b, const float* features, std::size_t begin, std::size_t end,
-                    float* params_out, std::size_t stride) {
+void apply_pose_blocks_any(const PoseBlocks& b, const float* features, std::size_t begin, std::size_t end,
+                           float* params_out, std::size_t stride) {
     const int d = b.d;
     const std::uint16_t* w = b.weights + b.weight_offsets[begin];
     for (std::size_t v = begin; v < end; ++v) {
@@ -498,13 +498,13 @@ void synthesize_any(const PoseBlocks& b, const float* features, std::size_t begi
     }
 }
 
-void synthesize_range(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out, std::size_t stride) {
+void apply_pose_blocks(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
+                       float* params_out, std::size_t stride) {
     // 2 and 4 lobes at order 4 (2 + 4 parameters per lobe), the usual models.
     switch (blocks.d) {
-        case 12: return synthesize_fixed<12>(blocks, features, begin, end, params_out, stride);
-        case 24: return synthesize_fixed<24>(blocks, features, begin, end, params_out, stride);
-        default: return synthesize_any(blocks, features, begin, end, params_out, stride);
+        case 12: return apply_pose_blocks_fixed<12>(blocks, features, begin, end, params_out, stride);
+        case 24: return apply_pose_blocks_fixed<24>(blocks, features, begin, end, params_out, stride);
+        default: return apply_pose_blocks_any(blocks, features, begin, end, params_out, stride);
     }
 }
 
@@ -514,10 +514,10 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace penumbra::visibility::detail {
 
-HWY_EXPORT(synthesize_range);
-void synthesize_range(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out, std::size_t stride) {
-    HWY_DYNAMIC_DISPATCH(synthesize_range)(blocks, features, begin, end, params_out, stride);
+HWY_EXPORT(apply_pose_blocks);
+void apply_pose_blocks(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
+                       float* params_out, std::size_t stride) {
+    HWY_DYNAMIC_DISPATCH(apply_pose_blocks)(blocks, features, begin, end, params_out, stride);
 }
 
 HWY_EXPORT(face_normals_range);
