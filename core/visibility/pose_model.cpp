@@ -903,13 +903,13 @@ void synthesize_lobes(const PoseModel& model, const float* joint_rotations, floa
     parallel_for(model.vertex_count, {threads, 2048, "visibility.pose_lobes"}, [&](std::size_t begin, std::size_t end) {
         synthesize_params_range(model, features.data(), begin, end, params_out + begin * d);
         if (axes_out && bands_out)
-            params_to_lobes(model.order, model.lobes, end - begin, params_out + begin * d,
-                            axes_out + begin * model.lobes * 3, bands_out + begin * model.lobes * model.order);
+            lobes_from_params(model.order, model.lobes, end - begin, params_out + begin * d,
+                              axes_out + begin * model.lobes * 3, bands_out + begin * model.lobes * model.order);
     });
 }
 
-void params_to_lobes(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
-                     float* bands_out) {
+void lobes_from_params(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
+                       float* bands_out) {
     // lambert_to_axis (zh_fit.hpp) in float SIMD lanes (runtime_kernel.cpp).
     detail::lobes_from_params(order, vertex_count * std::size_t(lobes), params, axes_out, bands_out);
 }

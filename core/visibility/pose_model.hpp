@@ -225,14 +225,14 @@ void synthesize_params_range(const PoseModel& model, const float* features, std:
 void synthesize_rows(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
                      float* params_out, std::size_t stride);
 
-// synthesize_params and params_to_lobes in one parallel pass.
+// synthesize_params and lobes_from_params in one parallel pass.
 void synthesize_lobes(const PoseModel& model, const float* joint_rotations, float* params_out, float* axes_out,
                       float* bands_out, int threads = 0);
 
 // Lobe parameters → axes in the local frame (V × lobes × 3, unit to float
 // rounding) and zonal bands (V × lobes × order), ready for Eq. 1.
-void params_to_lobes(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
-                     float* bands_out);
+void lobes_from_params(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
+                       float* bands_out);
 
 // Errors of the model against baked frames (e.g. poses it never saw). The
 // set's bones must include every model joint.

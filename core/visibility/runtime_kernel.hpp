@@ -63,8 +63,8 @@ void frames_range(const FrameTransform& transform, const NormalSources& sources,
                   float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts);
 
 // Lobe parameters (count lobes of 2 + order each: Lambert X, Y, then the
-// bands) → unit axes (count × 3) and bands (count × order): pose_model.hpp's
-// params_to_lobes.
+// bands) → unit axes (count × 3) and bands (count × order): the loop of
+// pose_model.hpp's lobes_from_params, over all lobes of all its vertices.
 void lobes_from_params(int order, std::size_t count, const float* params, float* axes_out, float* bands_out);
 
 // The pose model's arrays the synthesis reads (pose_model.hpp's PoseModel).
