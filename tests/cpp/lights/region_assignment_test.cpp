@@ -1,5 +1,5 @@
 // Region powers' assignment of map cells to their nearest sample
-// (lights/region_assignment.hpp) and the sums over it (lights.hpp, region
+// (lights/region_assignment.hpp) and the sums over it (frame_lights.hpp, region
 // mode), held to a brute-force search over every sample: the same nearest
 // sample for every cell (ties to the lowest index) on every SIMD target, and
 // the same powers, centroids and spreads, on random and extreme maps.
@@ -15,7 +15,7 @@
 
 #include "common/latlong.hpp"
 #include "common/simd_target.hpp"
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 #include "lights/region_assignment.hpp"
 #include "lights_test_util.hpp"
 
