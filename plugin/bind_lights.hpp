@@ -10,7 +10,7 @@
 
 #include "image/image.hpp"
 #include "lights/environment.hpp"
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 #include "lights/map_reader.hpp"
 
 namespace penumbra::bindings {

@@ -17,7 +17,7 @@
 #include "common/parallel.hpp"
 #include "enums.hpp"
 #include "lights/angular_regions.hpp"
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 #include "lights/sampling.hpp"
 
 namespace py = pybind11;

@@ -41,7 +41,7 @@
 #include "image/video.hpp"
 #include "lights/angular_regions.hpp"
 #include "lights/clustering.hpp"
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 #include "lights/map_reader.hpp"
 #include "common/parallel.hpp"
 #include "lights/rig.hpp"

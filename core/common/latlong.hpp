@@ -35,6 +35,10 @@
 // towards −y, i.e. clockwise seen from above, as when standing inside the
 // sphere looking out.
 //
+// Every function below takes an image position and size row first, as the
+// pixel buffer is stored (row-major, numpy's shape (H, W)): (row or y,
+// column or x, height, width).
+//
 // Upper-hemisphere maps (the light-rig paper's 360×90 "polar projection")
 // are the top half of a full map: the same φ, θ = (π/2) y / H, the bottom row
 // is the horizon. Every function below takes the θ range as theta_max:
@@ -86,14 +90,15 @@ inline double theta_of_y(double y, int height, double theta_max = full_sphere) {
 
 // ---- Image coordinates ↔ directions ----
 
-// Direction of continuous pixel position (x, y).
-inline Eigen::Vector3d direction_at(double x, double y, int width, int height, double theta_max = full_sphere) {
+// Direction of continuous pixel position (row coordinate y, column
+// coordinate x).
+inline Eigen::Vector3d direction_at(double y, double x, int height, int width, double theta_max = full_sphere) {
     return direction_of_angles(theta_of_y(y, height, theta_max), phi_of_x(x, width));
 }
 
 // Direction of the centre of pixel (row, column).
 inline Eigen::Vector3d pixel_direction(int row, int column, int height, int width, double theta_max = full_sphere) {
-    return direction_at(column + 0.5, row + 0.5, width, height, theta_max);
+    return direction_at(row + 0.5, column + 0.5, height, width, theta_max);
 }
 
 // Exact solid angle of any pixel in `row`: Δφ (cos θ_top − cos θ_bottom).

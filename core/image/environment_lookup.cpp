@@ -64,7 +64,7 @@ void radiance_row(const std::vector<EnvironmentTerm>& terms, int row, int width,
         weight_sum += weight;
         for (int c = 0; c < width; ++c)
             for (int j = 0; j < k; ++j) {
-                const Eigen::Vector3d d = latlong::direction_at(c + (j + 0.5) / k, y, width, height);
+                const Eigen::Vector3d d = latlong::direction_at(y, c + (j + 0.5) / k, height, width);
                 for (const EnvironmentTerm& term : terms) {
                     if (!term.image) continue;
                     const Eigen::Vector3f value =

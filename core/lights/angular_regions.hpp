@@ -21,7 +21,7 @@
 
 #include <Eigen/Core>
 
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 
 namespace penumbra::lights {
 

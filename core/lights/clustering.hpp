@@ -18,7 +18,7 @@
 
 #include <vector>
 
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 
 namespace penumbra::lights {
 

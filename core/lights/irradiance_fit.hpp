@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "lights/environment.hpp"
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 
 namespace penumbra::lights {
 

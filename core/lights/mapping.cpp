@@ -90,7 +90,7 @@ bool image_to_direction(Projection projection, const FisheyeLens& lens, int widt
     switch (projection) {
     case Projection::equirectangular:
     case Projection::hemisphere_polar:
-        direction = latlong::direction_at(x, y, width, height, latlong_theta_max(projection));
+        direction = latlong::direction_at(y, x, height, width, latlong_theta_max(projection));
         return true;
     case Projection::fisheye: {
         double u, v;

@@ -1,6 +1,6 @@
 // The spherical Voronoi regions of a set of directions (the lights' samples)
 // on a lat-long grid: which direction is nearest to each cell centre. Region
-// powers (lights.hpp) sum the map over these regions.
+// powers (frame_lights.hpp) sum the map over these regions.
 //
 // Nearest = the smallest squared chord |s − x|² (the largest dot product)
 // as chord2() computes it, ties to the lowest index: the answer of a search

@@ -5,12 +5,7 @@
 // `#pragma GCC target` turns into that target's instructions), a partial
 // batch repeats its last cell in the spare lanes, and choices are lane masks.
 
-#ifndef HWY_COMPILE_ALL_ATTAINABLE
-#define HWY_COMPILE_ALL_ATTAINABLE
-#endif
-#ifndef HWY_DISABLED_TARGETS
-#define HWY_DISABLED_TARGETS HWY_SSSE3
-#endif
+#include "common/simd_compiled_targets.hpp"  // before any Highway header
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "lights/region_kernels.cpp"
 #include <hwy/foreach_target.h>  // re-includes this file once per target
@@ -22,8 +17,8 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
-#include <utility>
 
+#include "common/simd_lanes-inl.h"
 #include "lights/region_kernels.hpp"
 
 #ifndef PENUMBRA_LIGHTS_REGION_KERNELS_ONCE
@@ -66,75 +61,58 @@ constexpr std::array<std::array<std::int64_t, 8>, 256> compress_order = [] {
 HWY_BEFORE_NAMESPACE();
 namespace penumbra::lights::detail::HWY_NAMESPACE {
 
-// One lane vector = one SIMD register of doubles for the target; EMU128 gets
-// one lane, the scalar reference.
-#if HWY_TARGET == HWY_EMU128 || HWY_TARGET == HWY_SCALAR
-constexpr int kLanes = 1;
-#else
-constexpr int kLanes = HWY_LANES(double);
-#endif
-
-typedef double VecD __attribute__((vector_size(kLanes * sizeof(double))));
-typedef long long MaskD __attribute__((vector_size(kLanes * sizeof(double))));
-
-// Written as one initializer of equal elements, which GCC emits as a single
-// broadcast (a loop of lane stores became one masked insert per lane).
-template <std::size_t... I>
-inline VecD splat_lanes(double value, std::index_sequence<I...>) {
-    return VecD{((void)I, value)...};
-}
-inline VecD splat(double value) { return splat_lanes(value, std::make_index_sequence<kLanes>{}); }
+using namespace simd::HWY_NAMESPACE;
 
 inline bool any(const MaskD& m) {
     long long a = 0;
-    for (int k = 0; k < kLanes; ++k) a |= m[k];
+    for (int k = 0; k < kDoubleLanes; ++k) a |= m[k];
     return a != 0;
 }
 
 // Lanes from a[start ..]: the last element repeats past `n`.
 inline VecD load(const double* a, std::size_t start, std::size_t n) {
     VecD v;
-    if (start + kLanes <= n) {
+    if (start + kDoubleLanes <= n) {
         std::memcpy(&v, a + start, sizeof v);
     } else {
-        for (int k = 0; k < kLanes; ++k) v[k] = a[std::min(start + std::size_t(k), n - 1)];
+        for (int k = 0; k < kDoubleLanes; ++k) v[k] = a[std::min(start + std::size_t(k), n - 1)];
     }
     return v;
 }
 
 inline void store(const VecD& v, double* a, std::size_t start, std::size_t n) {
-    if (start + kLanes <= n) {
+    if (start + kDoubleLanes <= n) {
         std::memcpy(a + start, &v, sizeof v);
         return;
     }
-    for (int k = 0; k < kLanes && start + std::size_t(k) < n; ++k) a[start + std::size_t(k)] = v[k];
+    for (int k = 0; k < kDoubleLanes && start + std::size_t(k) < n; ++k) a[start + std::size_t(k)] = v[k];
 }
 
 // The lanes of a[start ..] below `n` (zeros above): one whole load when
 // `readable` elements from `a` allow it, else element by element.
 inline VecD load_masked(const double* a, std::size_t start, std::size_t n, std::size_t readable) {
     VecD v{};
-    if (start + kLanes <= readable) {
+    if (start + kDoubleLanes <= readable) {
         std::memcpy(&v, a + start, sizeof v);
-        if (start + kLanes > n)
-            for (int k = 0; k < kLanes; ++k)
+        if (start + kDoubleLanes > n)
+            for (int k = 0; k < kDoubleLanes; ++k)
                 if (start + std::size_t(k) >= n) v[k] = 0.0;
     } else {
-        for (int k = 0; k < kLanes && start + std::size_t(k) < n; ++k) v[k] = a[start + std::size_t(k)];
+        for (int k = 0; k < kDoubleLanes && start + std::size_t(k) < n; ++k) v[k] = a[start + std::size_t(k)];
     }
     return v;
 }
 
 double chord2_to(Points p, std::size_t n, double cx, double cy, double cz, double* out) {
     VecD nearest = splat(std::numeric_limits<double>::infinity());
-    for (std::size_t i = 0; i < n; i += kLanes) {
+    for (std::size_t i = 0; i < n; i += kDoubleLanes) {
         const VecD dx = load(p.x, i, n) - cx, dy = load(p.y, i, n) - cy, dz = load(p.z, i, n) - cz;
         const VecD d2 = (dx * dx + dy * dy) + dz * dz;
         nearest = d2 < nearest ? d2 : nearest;
         store(d2, out, i, n);
     }
     double m = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < kLanes; ++k) m = std::min(m, nearest[k]);
+    for (int k = 0; k < kDoubleLanes; ++k) m = std::min(m, nearest[k]);
     return m;
 }
 
@@ -184,7 +162,7 @@ template <int kV>
     VecD x[kV], y[kV], z[kV], best[kV], best_index[kV];
 #pragma GCC unroll 4
     for (int v = 0; v < kV; ++v) {
-        const std::size_t j = first + std::size_t(v) * kLanes;
+        const std::size_t j = first + std::size_t(v) * kDoubleLanes;
         x[v] = load(cells.x, j, cells_count);
         y[v] = load(cells.y, j, cells_count);
         z[v] = load(cells.z, j, cells_count);
@@ -206,8 +184,8 @@ template <int kV>
     }
 #pragma GCC unroll 4
     for (int v = 0; v < kV; ++v) {
-        const std::size_t j = first + std::size_t(v) * kLanes;
-        for (int k = 0; k < kLanes && j + std::size_t(k) < cells_count; ++k)
+        const std::size_t j = first + std::size_t(v) * kDoubleLanes;
+        for (int k = 0; k < kDoubleLanes && j + std::size_t(k) < cells_count; ++k)
             nearest[j + std::size_t(k)] = int(best_index[v][k]);
     }
 }
@@ -216,11 +194,11 @@ void nearest_candidates(Points candidates, const int* index, std::size_t count, 
                         int* nearest) {
     // Four lane vectors at a time where the registers hold them (AVX-512 has
     // 32), two elsewhere; then what is left.
-    constexpr int kWide = kLanes >= 8 ? 4 : 2;
+    constexpr int kWide = kDoubleLanes >= 8 ? 4 : 2;
     std::size_t j = 0;
-    for (; j + kWide * kLanes <= cells_count; j += kWide * kLanes)
+    for (; j + kWide * kDoubleLanes <= cells_count; j += kWide * kDoubleLanes)
         nearest_vectors<kWide>(candidates, index, count, cells, cells_count, j, nearest);
-    const std::size_t left = (cells_count - j + kLanes - 1) / kLanes;
+    const std::size_t left = (cells_count - j + kDoubleLanes - 1) / kDoubleLanes;
     switch (left) {
         case 4: return nearest_vectors<4>(candidates, index, count, cells, cells_count, j, nearest);
         case 3: return nearest_vectors<3>(candidates, index, count, cells, cells_count, j, nearest);
@@ -247,7 +225,7 @@ inline double squared_angle(double x, double y, double z, double lx, double ly, 
 void weighted_squared_angles(const RowRun& run, Points lights, double* out) {
     const double st = run.sin_theta, ct = run.cos_theta;
     const std::size_t n = run.cells;
-    for (std::size_t j = 0; j < n; j += kLanes) {
+    for (std::size_t j = 0; j < n; j += kDoubleLanes) {
         VecD cos_lanes, sin_lanes, lx, ly, lz;  // the tables are padded: whole loads
         std::memcpy(&cos_lanes, run.cos_phi + j, sizeof cos_lanes);
         std::memcpy(&sin_lanes, run.sin_phi + j, sizeof sin_lanes);
@@ -264,7 +242,7 @@ void weighted_squared_angles(const RowRun& run, Points lights, double* out) {
             t = asin2_sum<asin2_terms>(u);
             const MaskD wide = u > 1.0 / 16.0;
             if (any(wide))
-                for (int k = 0; k < kLanes; ++k)
+                for (int k = 0; k < kDoubleLanes; ++k)
                     if (wide[k])
                         t[k] = squared_angle(st * cos_lanes[k], st * sin_lanes[k], ct, lx[k], ly[k], lz[k]);
         }
@@ -341,29 +319,28 @@ HWY_AFTER_NAMESPACE();
 namespace penumbra::lights::detail {
 
 HWY_EXPORT(chord2_to);
-HWY_EXPORT(keep_within);
-HWY_EXPORT(nearest_candidates);
-HWY_EXPORT(weighted_squared_angles);
-HWY_EXPORT(run_sums);
-
 double chord2_to(Points p, std::size_t n, double cx, double cy, double cz, double* out) {
     return HWY_DYNAMIC_DISPATCH(chord2_to)(p, n, cx, cy, cz, out);
 }
 
+HWY_EXPORT(keep_within);
 std::size_t keep_within(Points from, const int* index, std::size_t n, const double* distance, double bound2,
                         double* x, double* y, double* z, int* kept) {
     return HWY_DYNAMIC_DISPATCH(keep_within)(from, index, n, distance, bound2, x, y, z, kept);
 }
 
+HWY_EXPORT(nearest_candidates);
 void nearest_candidates(Points candidates, const int* index, std::size_t count, Points cells, std::size_t cells_count,
                         int* nearest) {
     HWY_DYNAMIC_DISPATCH(nearest_candidates)(candidates, index, count, cells, cells_count, nearest);
 }
 
+HWY_EXPORT(weighted_squared_angles);
 void weighted_squared_angles(const RowRun& run, Points lights, double* out) {
     HWY_DYNAMIC_DISPATCH(weighted_squared_angles)(run, lights, out);
 }
 
+HWY_EXPORT(run_sums);
 RunSums run_sums(const RowRun& run) { return HWY_DYNAMIC_DISPATCH(run_sums)(run); }
 
 }  // namespace penumbra::lights::detail

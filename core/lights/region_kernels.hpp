@@ -1,4 +1,4 @@
-// The inner loops of region powers (lights.cpp, region_assignment.cpp),
+// The inner loops of region powers (frame_lights.cpp, region_assignment.cpp),
 // compiled once per SIMD target by Highway (SSE4, AVX2, AVX-512, and EMU128
 // as the one-lane reference) and chosen at run time, so the portable
 // x86-64-v2 build runs AVX2/AVX-512 code where the CPU has it.

@@ -28,7 +28,7 @@
 #include "image/frame_source.hpp"
 #include "lights/clustering.hpp"
 #include "lights/environment.hpp"
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 #include "lights/map_reader.hpp"
 #include "lights/temporal.hpp"
 #include "lights/tracking.hpp"

@@ -28,11 +28,11 @@
 
 #include <Eigen/Core>
 
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 
 namespace penumbra::lights {
 
-// SunModel (point, blender3_disc, blender4_cone) is declared in lights.hpp.
+// SunModel (point, blender3_disc, blender4_cone) is declared in frame_lights.hpp.
 
 // The sun model of a Blender version (major, minor): blender4_cone from 4.0 on.
 SunModel sun_model_for_blender(int major, int minor);

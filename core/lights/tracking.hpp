@@ -30,7 +30,7 @@
 
 #include <Eigen/Core>
 
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 #include "lights/motion.hpp"
 
 namespace penumbra::lights {

@@ -60,6 +60,7 @@
 #include <Eigen/Core>
 
 #include "common/setting.hpp"
+#include "common/simd_target.hpp"
 #include "sh/basis.hpp"
 #include "sh/brdf_operator.hpp"
 
@@ -220,15 +221,12 @@ private:
     mutable std::map<double, std::shared_ptr<const ZonalOperator>> phong_cache_;
 };
 
-// The hot loop is compiled for several SIMD targets and the best one the CPU
-// supports is chosen at run time (Highway's names: "AVX3" = AVX-512, "AVX2",
-// "SSE4", and "EMU128", the one-lane scalar reference).
-std::string simd_target();
-// Every target compiled in that this CPU supports, best first.
-std::vector<std::string> simd_targets();
-// Tests and benchmarks: run on `name` (one of simd_targets()) from now on;
-// "" returns to the CPU's best. Not thread-safe against concurrent shading.
-// ArgumentError for a name not in simd_targets().
-void force_simd_target(const std::string& name);
+// The SIMD target the hot loop runs on, under the SH engine's names (bound
+// as _penumbra.sh.simd_target, simd_targets and force_simd_target): the
+// choice is common/simd_target.hpp's, one for the whole process, shared with
+// the visibility and lights kernels.
+using penumbra::force_simd_target;
+using penumbra::simd_target;
+using penumbra::simd_targets;
 
 }  // namespace penumbra::sh

@@ -7,23 +7,16 @@
 // Layout: vertices go in batches of one SIMD register of the precision S the
 // kernel computes in, that of the buffers (double: 1 lane for the scalar
 // reference, 2 with SSE4, 4 with AVX2, 8 with AVX-512; float: 1, 4, 8, 16).
-// Every per-vertex quantity is such a lane vector (GCC/Clang vector
-// extensions, which Highway's per-target `#pragma GCC target` turns into
-// that target's instructions), so every step is the same straight-line
+// Every per-vertex quantity is such a lane vector (common/simd_lanes-inl.h:
+// GCC/Clang vector extensions, which Highway's per-target `#pragma GCC
+// target` turns into that target's instructions), so every step is the same straight-line
 // arithmetic on all lanes with constants (T, X, lighting) shared by the
 // batch, and validity is a lane mask instead of a branch. The order is a
 // template parameter for orders 1–8 (fully unrolled) and a runtime value
 // above. Compiled with -fno-math-errno (a lane square root is one vector
 // instruction).
 
-// Every target at least as good as the baseline, plus EMU128 for the scalar
-// reference; SSSE3 is below this build's x86-64-v2 baseline.
-#ifndef HWY_COMPILE_ALL_ATTAINABLE
-#define HWY_COMPILE_ALL_ATTAINABLE
-#endif
-#ifndef HWY_DISABLED_TARGETS
-#define HWY_DISABLED_TARGETS HWY_SSSE3
-#endif
+#include "common/simd_compiled_targets.hpp"  // before any Highway header
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "sh/pose_shading_kernel.cpp"
 #include <hwy/foreach_target.h>  // re-includes this file once per target
@@ -34,86 +27,38 @@
 #include <cstdint>
 #include <cstring>
 #include <numbers>
-#include <string>
 #include <type_traits>
 #include <vector>
 
-#include "common/error.hpp"
+#include "common/simd_lanes-inl.h"
 #include "sh/basis.hpp"
 #include "sh/pose_shading_setup.hpp"
 
 HWY_BEFORE_NAMESPACE();
 namespace penumbra::sh::detail::HWY_NAMESPACE {
 
-// One lane vector = one SIMD register of S for the target being compiled:
-// wider vectors are split by the compiler into pieces that go through
-// memory, which measured 1.6x slower (docs/sh-engine.md). EMU128 (no SIMD
-// instructions) gets one lane: the scalar reference the SIMD targets are
-// tested and benchmarked against.
+using namespace simd::HWY_NAMESPACE;
+
+// Squared lengths at or below count as zero (lengths ~1e-150 in double,
+// ~1e-15 in float).
 template <typename S>
-struct Lanes;
-
-#if HWY_TARGET == HWY_EMU128 || HWY_TARGET == HWY_SCALAR
-constexpr int kDoubleLanes = 1, kFloatLanes = 1;
-#else
-constexpr int kDoubleLanes = HWY_LANES(double), kFloatLanes = HWY_LANES(float);
-#endif
-
+constexpr S tiny_squared = S(1e-30f);
 template <>
-struct Lanes<double> {
-    static constexpr int count = kDoubleLanes;
-    typedef double Vec __attribute__((vector_size(count * sizeof(double))));
-    typedef long long Mask __attribute__((vector_size(count * sizeof(double))));
-    // Squared lengths at or below count as zero (lengths ~1e-150).
-    static constexpr double tiny = 1e-300;
-};
-
-template <>
-struct Lanes<float> {
-    static constexpr int count = kFloatLanes;
-    typedef float Vec __attribute__((vector_size(count * sizeof(float))));
-    typedef std::int32_t Mask __attribute__((vector_size(count * sizeof(float))));
-    static constexpr float tiny = 1e-30f;  // lengths ~1e-15
-};
-
-template <typename S>
-using Vec = typename Lanes<S>::Vec;
-template <typename S>
-using Mask = typename Lanes<S>::Mask;
+constexpr double tiny_squared<double> = 1e-300;
 
 // The steps of shading one batch of vertices, in the order shade_range
-// calls them (paper §4.3 steps 2–5, docs/sh-engine.md). Each is forced inline
-// so the batch stays one straight-line block in registers.
-#define PENUMBRA_LANES_INLINE [[gnu::always_inline]] inline
-
-// value − 0 is value exactly (−0 included) and compiles to one broadcast; a
-// lane-by-lane fill compiled to one masked insert per lane.
-template <typename S>
-PENUMBRA_LANES_INLINE Vec<S> splat(S value) {
-    return value - Vec<S>{};
-}
-
-template <typename S>
-PENUMBRA_LANES_INLINE Vec<S> sqrt_lanes(const Vec<S>& x) {
-    Vec<S> r{};
-    for (int k = 0; k < Lanes<S>::count; ++k) r[k] = std::sqrt(x[k]);
-    return r;
-}
-
-template <typename S>
-PENUMBRA_LANES_INLINE Mask<S> finite(const Vec<S>& x) {
-    return x - x == S(0);  // false for NaN and ±inf
-}
-
+// calls them (paper §4.3 steps 2–5, docs/sh-engine.md), each forced inline
+// (PENUMBRA_LANES_INLINE) so the batch stays one straight-line block in
+// registers.
 // (x, y, z) ← unit vector in lanes where it is finite and its squared length
-// lies in (Lanes<S>::tiny, inf); returns that mask and sets (x, y, z) to the
+// lies in (tiny_squared<S>, inf); returns that mask and sets (x, y, z) to the
 // fallback (fx, fy, fz) in the other lanes.
 template <typename S, typename F>
 PENUMBRA_LANES_INLINE Mask<S> normalize_lanes(Vec<S>& x, Vec<S>& y, Vec<S>& z, const F& fx, const F& fy,
                                               const F& fz) {
     const Vec<S> squared = x * x + y * y + z * z;
-    const Mask<S> ok = finite<S>(squared) & (squared > Lanes<S>::tiny);
-    const Vec<S> inverse_length = S(1) / sqrt_lanes<S>(ok ? squared : splat<S>(1));
+    const Mask<S> ok = finite(squared) & (squared > tiny_squared<S>);
+    const Vec<S> inverse_length = S(1) / sqrt_lanes(ok ? squared : splat<S>(1));
     const Vec<S> zero{};
     x = ok ? x * inverse_length : zero + fx;
     y = ok ? y * inverse_length : zero + fy;
@@ -343,7 +288,7 @@ PENUMBRA_LANES_INLINE LaneVector<S> reflection_axis(const PoseShadingSetup<S>& s
     wx = setup.camera[0] - wx;
     wy = setup.camera[1] - wy;
     wz = setup.camera[2] - wz;
-    const Mask<S> position_ok = finite<S>(wx) & finite<S>(wy) & finite<S>(wz);
+    const Mask<S> position_ok = finite(wx) & finite(wy) & finite(wz);
     f.valid &= position_ok;
     const Mask<S> has_view = normalize_lanes<S>(wx, wy, wz, nx, ny, nz) & position_ok;
     const Vec<S> cosine = nx * wx + ny * wy + nz * wz;
@@ -371,7 +316,7 @@ template <typename S>
 PENUMBRA_LANES_INLINE LaneRotation<S> frame_rotation(const LaneVector<S>& z, const LaneFrame<S>& f) {
     LaneRotation<S> q;
     q.ct = z.z;
-    q.st = sqrt_lanes<S>(z.x * z.x + z.y * z.y);
+    q.st = sqrt_lanes(z.x * z.x + z.y * z.y);
     const Mask<S> pole = !(q.st > S(0));
     const Vec<S> inverse_st = S(1) / (pole ? splat<S>(1) : q.st);
     q.cp = pole ? splat<S>(1) : z.x * inverse_st;
@@ -397,13 +342,13 @@ PENUMBRA_LANES_INLINE LaneRotation<S> frame_rotation(const LaneVector<S>& z, con
 template <typename S>
 PENUMBRA_LANES_INLINE LaneVector<S> lambert_axis(Vec<S> x, Vec<S> y) {
     Vec<S> r2 = x * x + y * y;
-    const Mask<S> usable = finite<S>(r2), outside = usable & (r2 > S(4));
-    const Vec<S> pull = S(2) / sqrt_lanes<S>(outside ? r2 : splat<S>(4));
+    const Mask<S> usable = finite(r2), outside = usable & (r2 > S(4));
+    const Vec<S> pull = S(2) / sqrt_lanes(outside ? r2 : splat<S>(4));
     x = outside ? x * pull : x;
     y = outside ? y * pull : y;
     r2 = outside ? splat<S>(4) : r2;
     const Vec<S> rest = S(1) - S(0.25) * r2;
-    const Vec<S> s = sqrt_lanes<S>(rest > S(0) ? rest : splat<S>(0));
+    const Vec<S> s = sqrt_lanes(rest > S(0) ? rest : splat<S>(0));
     return {usable ? s * x : splat<S>(0), usable ? s * y : splat<S>(0), usable ? S(1) - S(0.5) * r2 : splat<S>(1)};
 }
 
@@ -426,9 +371,9 @@ template <typename S, typename Buffers>
 PENUMBRA_LANES_INLINE LaneVector<S> load_lobe(const Buffers& buffers, const Batch& batch, int lobe, int lobes,
                                               int order, Vec<S>* band, Mask<S>& valid) {
     const LaneVector<S> a = load_lobe_raw(buffers, batch, lobe, lobes, order, band);
-    Mask<S> bands_finite = finite<S>(band[0]), bands_zero = band[0] == S(0);
+    Mask<S> bands_finite = finite(band[0]), bands_zero = band[0] == S(0);
     for (int l = 1; l < order; ++l) {
-        bands_finite &= finite<S>(band[l]);
+        bands_finite &= finite(band[l]);
         bands_zero &= band[l] == S(0);
     }
     LaneVector<S> unit = a;
@@ -624,8 +569,6 @@ void shade_block(const PoseShadingSetup<float>& setup, const PoseBlock& block, s
     shade_batches<float, kOrder, PoseBlock>(setup, block, 0, block.vertex_count, invalid_count);
 }
 
-#undef PENUMBRA_LANES_INLINE
-
 template <typename S>
 RangeFunction<S> range_function(int order) {
     switch (order) {
@@ -657,7 +600,7 @@ BlockFunction block_function(int order) {
 
 RangeFunction<float> range_function_float(int order) { return range_function<float>(order); }
 RangeFunction<double> range_function_double(int order) { return range_function<double>(order); }
-int lanes() { return kDoubleLanes; }
+int lanes() { return Lanes<double>::count; }
 
 }  // namespace penumbra::sh::detail::HWY_NAMESPACE
 HWY_AFTER_NAMESPACE();
@@ -666,40 +609,16 @@ HWY_AFTER_NAMESPACE();
 namespace penumbra::sh::detail {
 
 HWY_EXPORT(range_function_float);
-HWY_EXPORT(range_function_double);
-HWY_EXPORT(block_function);
-HWY_EXPORT(lanes);
-
 RangeFunction<float> range_function_float(int order) { return HWY_DYNAMIC_DISPATCH(range_function_float)(order); }
+
+HWY_EXPORT(range_function_double);
 RangeFunction<double> range_function_double(int order) { return HWY_DYNAMIC_DISPATCH(range_function_double)(order); }
+
+HWY_EXPORT(block_function);
 BlockFunction block_function(int order) { return HWY_DYNAMIC_DISPATCH(block_function)(order); }
+
+HWY_EXPORT(lanes);
 int simd_lanes() { return HWY_DYNAMIC_DISPATCH(lanes)(); }
 
 }  // namespace penumbra::sh::detail
-
-namespace penumbra::sh {
-
-// HWY_TARGETS of this file (it compiles EMU128 too): the dispatch table's.
-std::vector<std::string> simd_targets() {
-    std::vector<std::string> names;
-    for (const std::int64_t target : hwy::SupportedAndGeneratedTargets()) names.push_back(hwy::TargetName(target));
-    return names;
-}
-
-std::string simd_target() { return simd_targets().front(); }
-
-void force_simd_target(const std::string& name) {
-    hwy::SetSupportedTargetsForTest(0);  // the CPU's own list, and the dispatch chooses again
-    if (name.empty()) return;
-    for (const std::int64_t target : hwy::SupportedAndGeneratedTargets())
-        if (name == hwy::TargetName(target)) {
-            hwy::SetSupportedTargetsForTest(target);
-            return;
-        }
-    std::string known;
-    for (const std::string& n : simd_targets()) known += (known.empty() ? "" : ", ") + n;
-    throw ArgumentError("SIMD target '" + name + "' is not compiled in or not supported by this CPU (have: " + known + ")");
-}
-
-}  // namespace penumbra::sh
 #endif  // HWY_ONCE

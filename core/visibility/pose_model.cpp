@@ -883,17 +883,17 @@ detail::PoseBlocks pose_blocks(const PoseModel& model) {
 
 }  // namespace
 
-void synthesize_range(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out) {
+void synthesize_params_range(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
+                             float* params_out) {
     // A vertex the model stores as constant has no joint blocks: its
     // parameters are the bias alone. The loop is runtime_kernel.cpp's (SIMD
     // targets chosen at run time).
-    detail::synthesize_range(pose_blocks(model), features, begin, end, params_out);
+    detail::apply_pose_blocks(pose_blocks(model), features, begin, end, params_out);
 }
 
 void synthesize_rows(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
                      float* params_out, std::size_t stride) {
-    detail::synthesize_range(pose_blocks(model), features, begin, end, params_out, std::max<std::size_t>(stride, 1));
+    detail::apply_pose_blocks(pose_blocks(model), features, begin, end, params_out, std::max<std::size_t>(stride, 1));
 }
 
 void synthesize_lobes(const PoseModel& model, const float* joint_rotations, float* params_out, float* axes_out,
@@ -901,15 +901,15 @@ void synthesize_lobes(const PoseModel& model, const float* joint_rotations, floa
     const int d = model.params_per_vertex();
     const std::vector<float> features = pose_features(model, joint_rotations);
     parallel_for(model.vertex_count, {threads, 2048, "visibility.pose_lobes"}, [&](std::size_t begin, std::size_t end) {
-        synthesize_range(model, features.data(), begin, end, params_out + begin * d);
+        synthesize_params_range(model, features.data(), begin, end, params_out + begin * d);
         if (axes_out && bands_out)
-            params_to_lobes(model.order, model.lobes, end - begin, params_out + begin * d,
-                            axes_out + begin * model.lobes * 3, bands_out + begin * model.lobes * model.order);
+            lobes_from_params(model.order, model.lobes, end - begin, params_out + begin * d,
+                              axes_out + begin * model.lobes * 3, bands_out + begin * model.lobes * model.order);
     });
 }
 
-void params_to_lobes(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
-                     float* bands_out) {
+void lobes_from_params(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
+                       float* bands_out) {
     // lambert_to_axis (zh_fit.hpp) in float SIMD lanes (runtime_kernel.cpp).
     detail::lobes_from_params(order, vertex_count * std::size_t(lobes), params, axes_out, bands_out);
 }

@@ -218,21 +218,21 @@ void synthesize_params(const PoseModel& model, const float* joint_rotations, flo
 // ArgumentError for a non-finite rotation), then the parameters of vertices
 // [begin, end), written from params_out[0] on.
 std::vector<float> pose_features(const PoseModel& model, const float* joint_rotations);
-void synthesize_range(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out);
+void synthesize_params_range(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
+                             float* params_out);
 // The same as rows: parameter i of vertex v at params_out[i · stride + v −
 // begin] (stride ≥ end − begin).
 void synthesize_rows(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
                      float* params_out, std::size_t stride);
 
-// synthesize_params and params_to_lobes in one parallel pass.
+// synthesize_params and lobes_from_params in one parallel pass.
 void synthesize_lobes(const PoseModel& model, const float* joint_rotations, float* params_out, float* axes_out,
                       float* bands_out, int threads = 0);
 
 // Lobe parameters → axes in the local frame (V × lobes × 3, unit to float
 // rounding) and zonal bands (V × lobes × order), ready for Eq. 1.
-void params_to_lobes(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
-                     float* bands_out);
+void lobes_from_params(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
+                       float* bands_out);
 
 // Errors of the model against baked frames (e.g. poses it never saw). The
 // set's bones must include every model joint.

@@ -6,12 +6,7 @@
 // Compiled with -ffp-contract=off (Blender's face normals bit for bit) and
 // -fno-math-errno (a vector square root is one instruction).
 
-#ifndef HWY_COMPILE_ALL_ATTAINABLE
-#define HWY_COMPILE_ALL_ATTAINABLE
-#endif
-#ifndef HWY_DISABLED_TARGETS
-#define HWY_DISABLED_TARGETS HWY_SSSE3
-#endif
+#include "common/simd_compiled_targets.hpp"  // before any Highway header
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "visibility/runtime_kernel.cpp"
 #include <hwy/foreach_target.h>  // re-includes this file once per target
@@ -23,29 +18,13 @@
 #include <cstring>
 #include <numbers>
 
+#include "common/simd_lanes-inl.h"
 #include "visibility/runtime_kernel.hpp"
 
 HWY_BEFORE_NAMESPACE();
 namespace penumbra::visibility::detail::HWY_NAMESPACE {
 
-#if HWY_TARGET == HWY_EMU128 || HWY_TARGET == HWY_SCALAR
-constexpr int kLanes = 1;
-#else
-constexpr int kLanes = HWY_LANES(float);
-#endif
-
-typedef float VecF __attribute__((vector_size(kLanes * sizeof(float))));
-typedef std::int32_t MaskF __attribute__((vector_size(kLanes * sizeof(float))));
-
-#define PENUMBRA_LANES_INLINE [[gnu::always_inline]] inline
-
-PENUMBRA_LANES_INLINE VecF splat(float value) { return value - VecF{}; }
-
-PENUMBRA_LANES_INLINE VecF sqrt_lanes(const VecF& x) {
-    VecF r{};
-    for (int k = 0; k < kLanes; ++k) r[k] = std::sqrt(x[k]);
-    return r;
-}
+using namespace simd::HWY_NAMESPACE;
 
 struct Lanes3 {
     VecF x, y, z;
@@ -56,7 +35,7 @@ struct Lanes3 {
 // broadcasts, each waiting on the last), and the other way for results read
 // lane by lane.
 struct Staging3 {
-    alignas(64) float x[kLanes], y[kLanes], z[kLanes];
+    alignas(64) float x[kFloatLanes], y[kFloatLanes], z[kFloatLanes];
     void set(int k, const float* p) {
         x[k] = p[0];
         y[k] = p[1];
@@ -115,18 +94,18 @@ PENUMBRA_LANES_INLINE VecF safe_acos_approx(const VecF& x) {
 PENUMBRA_LANES_INLINE Lanes3 corner_positions(const float* positions, const std::uint32_t* corner_vertex,
                                               const std::uint32_t* first, int c) {
     Staging3 p;
-    for (int k = 0; k < kLanes; ++k) p.set(k, positions + 3 * std::size_t(corner_vertex[first[k] + c]));
+    for (int k = 0; k < kFloatLanes; ++k) p.set(k, positions + 3 * std::size_t(corner_vertex[first[k] + c]));
     return p.load();
 }
 
-// `lanes` ≤ kLanes faces of Size corners each, one per lane (a short batch
+// `lanes` ≤ kFloatLanes faces of Size corners each, one per lane (a short batch
 // repeats its last face); vertex_normals.hpp's rule, the same operations in
 // the same order as face_single.
 template <int Size>
 void face_batch(const std::uint32_t* face_start, const std::uint32_t* corner_vertex, const float* positions,
                 const std::uint32_t* faces, int lanes, float* face_normals, float* corner_angles) {
-    std::uint32_t first[kLanes];
-    for (int k = 0; k < kLanes; ++k) first[k] = face_start[faces[std::min(k, lanes - 1)]];
+    std::uint32_t first[kFloatLanes];
+    for (int k = 0; k < kFloatLanes; ++k) first[k] = face_start[faces[std::min(k, lanes - 1)]];
     Lanes3 p[Size];
     for (int c = 0; c < Size; ++c) p[c] = corner_positions(positions, corner_vertex, first, c);
     // Newell's method from the last corner round.
@@ -141,7 +120,7 @@ void face_batch(const std::uint32_t* face_start, const std::uint32_t* corner_ver
     Lanes3 edge[Size];
     for (int c = 0; c < Size; ++c) edge[c] = normalized(minus(p[(c + 1) % Size], p[c]));
     for (int c = 0; c < Size; ++c) {
-        alignas(64) float angle[kLanes];
+        alignas(64) float angle[kFloatLanes];
         const VecF lanes_angle = safe_acos_approx(-dot(edge[(c + Size - 1) % Size], edge[c]));
         std::memcpy(angle, &lanes_angle, sizeof angle);
         for (int k = 0; k < lanes; ++k) corner_angles[first[k] + c] = angle[k];
@@ -198,7 +177,7 @@ void face_normals_range(const std::uint32_t* face_start, const std::uint32_t* co
                         const std::uint32_t* faces, std::size_t count, int size, float* face_normals,
                         float* corner_angles) {
     for (std::size_t i = 0; i < count;) {
-        const int lanes = int(std::min<std::size_t>(kLanes, count - i));
+        const int lanes = int(std::min<std::size_t>(kFloatLanes, count - i));
         if (size == 4) face_batch<4>(face_start, corner_vertex, positions, faces + i, lanes, face_normals, corner_angles);
         else if (size == 3) face_batch<3>(face_start, corner_vertex, positions, faces + i, lanes, face_normals, corner_angles);
         else face_single(face_start, corner_vertex, positions, faces[i], face_normals, corner_angles);
@@ -239,8 +218,8 @@ Lanes3 blender_normals(const NormalSources& sources, const float* positions, std
 
 void vertex_normals_range(const NormalSources& sources, const float* positions, std::size_t begin, std::size_t end,
                           float* normals_out) {
-    for (std::size_t v = begin; v < end; v += kLanes) {
-        const int lanes = int(std::min<std::size_t>(kLanes, end - v));
+    for (std::size_t v = begin; v < end; v += kFloatLanes) {
+        const int lanes = int(std::min<std::size_t>(kFloatLanes, end - v));
         Staging3 n;
         n.store(blender_normals(sources, positions, v, lanes));
         for (int k = 0; k < lanes; ++k) {
@@ -254,10 +233,10 @@ void vertex_normals_range(const NormalSources& sources, const float* positions, 
 
 void lobes_from_params(int order, std::size_t count, const float* params, float* axes_out, float* bands_out) {
     const int ppl = 2 + order;
-    for (std::size_t i = 0; i < count; i += kLanes) {
-        const int lanes = int(std::min<std::size_t>(kLanes, count - i));
+    for (std::size_t i = 0; i < count; i += kFloatLanes) {
+        const int lanes = int(std::min<std::size_t>(kFloatLanes, count - i));
         VecF X, Y;
-        for (int k = 0; k < kLanes; ++k) {
+        for (int k = 0; k < kFloatLanes; ++k) {
             const float* p = params + (i + std::size_t(std::min(k, lanes - 1))) * ppl;
             X[k] = p[0];
             Y[k] = p[1];
@@ -303,8 +282,6 @@ PENUMBRA_LANES_INLINE Lanes3 transform(const LaneMatrix& a, const Lanes3& v) {
             m[6] * v.x + m[7] * v.y + m[8] * v.z};
 }
 
-PENUMBRA_LANES_INLINE MaskF finite(const VecF& x) { return x - x == 0.0f; }
-
 // Duff et al. 2017's tangent of a unit normal (mesh_frames.cpp's
 // basis_from_normal).
 PENUMBRA_LANES_INLINE Lanes3 basis_tangent(const Lanes3& n) {
@@ -322,7 +299,7 @@ PENUMBRA_LANES_INLINE void store_rows(float* rows, std::size_t stride, std::size
     std::memcpy(rows + 2 * stride + column, &v.z, sizeof(float) * std::size_t(count));
 }
 
-// A batch of `count` ≤ kLanes vertices from `begin` (a short batch repeats
+// A batch of `count` ≤ kFloatLanes vertices from `begin` (a short batch repeats
 // its last vertex in the spare lanes).
 void frames_batch(const FrameTransform& tr, const LaneMatrix& linear, const LaneMatrix& normal_matrix,
                   const NormalSources& sources, const float* positions,
@@ -331,8 +308,8 @@ void frames_batch(const FrameTransform& tr, const LaneMatrix& linear, const Lane
                   FrameCounts& counts) {
     const Lanes3 local = blender_normals(sources, positions, begin, count);
     Staging3 p_lanes, q_lanes;
-    alignas(64) std::int32_t own_lanes[kLanes];
-    for (int k = 0; k < kLanes; ++k) {
+    alignas(64) std::int32_t own_lanes[kFloatLanes];
+    for (int k = 0; k < kFloatLanes; ++k) {
         const std::size_t v = begin + std::size_t(std::min(k, count - 1));
         const std::uint32_t neighbour = neighbours[v];
         own_lanes[k] = neighbour == v ? -1 : 0;
@@ -376,9 +353,9 @@ void frames_range(const FrameTransform& transform, const NormalSources& sources,
                   const std::uint32_t* neighbours, std::size_t begin, std::size_t end, std::size_t stride,
                   float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts) {
     const LaneMatrix linear(transform.linear), normal_matrix(transform.normal_matrix);
-    for (std::size_t v = begin; v < end; v += kLanes)
+    for (std::size_t v = begin; v < end; v += kFloatLanes)
         frames_batch(transform, linear, normal_matrix, sources, positions, neighbours, v,
-                     int(std::min<std::size_t>(kLanes, end - v)), begin, stride, normals_out, tangents_out,
+                     int(std::min<std::size_t>(kFloatLanes, end - v)), begin, stride, normals_out, tangents_out,
                      positions_out, counts);
 }
 
@@ -476,8 +453,8 @@ struct Accumulator {
 };
 
 template <int D>
-void synthesize_fixed(const PoseBlocks& b, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out, std::size_t stride) {
+void apply_pose_blocks_fixed(const PoseBlocks& b, const float* features, std::size_t begin, std::size_t end,
+                             float* params_out, std::size_t stride) {
     static_assert(D % 4 == 0);
     const std::uint16_t* w = b.weights + b.weight_offsets[begin];
     for (std::size_t v = begin; v < end; ++v) {
@@ -501,8 +478,8 @@ void synthesize_fixed(const PoseBlocks& b, const float* features, std::size_t be
     }
 }
 
-void synthesize_any(const PoseBlocks& b, const float* features, std::size_t begin, std::size_t end,
-                    float* params_out, std::size_t stride) {
+void apply_pose_blocks_any(const PoseBlocks& b, const float* features, std::size_t begin, std::size_t end,
+                           float* params_out, std::size_t stride) {
     const int d = b.d;
     const std::uint16_t* w = b.weights + b.weight_offsets[begin];
     for (std::size_t v = begin; v < end; ++v) {
@@ -521,17 +498,15 @@ void synthesize_any(const PoseBlocks& b, const float* features, std::size_t begi
     }
 }
 
-void synthesize_range(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out, std::size_t stride) {
+void apply_pose_blocks(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
+                       float* params_out, std::size_t stride) {
     // 2 and 4 lobes at order 4 (2 + 4 parameters per lobe), the usual models.
     switch (blocks.d) {
-        case 12: return synthesize_fixed<12>(blocks, features, begin, end, params_out, stride);
-        case 24: return synthesize_fixed<24>(blocks, features, begin, end, params_out, stride);
-        default: return synthesize_any(blocks, features, begin, end, params_out, stride);
+        case 12: return apply_pose_blocks_fixed<12>(blocks, features, begin, end, params_out, stride);
+        case 24: return apply_pose_blocks_fixed<24>(blocks, features, begin, end, params_out, stride);
+        default: return apply_pose_blocks_any(blocks, features, begin, end, params_out, stride);
     }
 }
-
-#undef PENUMBRA_LANES_INLINE
 
 }  // namespace penumbra::visibility::detail::HWY_NAMESPACE
 HWY_AFTER_NAMESPACE();
@@ -539,17 +514,13 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace penumbra::visibility::detail {
 
-HWY_EXPORT(face_normals_range);
-HWY_EXPORT(vertex_normals_range);
-HWY_EXPORT(lobes_from_params);
-HWY_EXPORT(frames_range);
-HWY_EXPORT(synthesize_range);
-
-void synthesize_range(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out, std::size_t stride) {
-    HWY_DYNAMIC_DISPATCH(synthesize_range)(blocks, features, begin, end, params_out, stride);
+HWY_EXPORT(apply_pose_blocks);
+void apply_pose_blocks(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
+                       float* params_out, std::size_t stride) {
+    HWY_DYNAMIC_DISPATCH(apply_pose_blocks)(blocks, features, begin, end, params_out, stride);
 }
 
+HWY_EXPORT(face_normals_range);
 void face_normals_range(const std::uint32_t* face_start, const std::uint32_t* corner_vertex, const float* positions,
                         const std::uint32_t* faces, std::size_t count, int size, float* face_normals,
                         float* corner_angles) {
@@ -557,15 +528,18 @@ void face_normals_range(const std::uint32_t* face_start, const std::uint32_t* co
                                              corner_angles);
 }
 
+HWY_EXPORT(vertex_normals_range);
 void vertex_normals_range(const NormalSources& sources, const float* positions, std::size_t begin, std::size_t end,
                           float* normals_out) {
     HWY_DYNAMIC_DISPATCH(vertex_normals_range)(sources, positions, begin, end, normals_out);
 }
 
+HWY_EXPORT(lobes_from_params);
 void lobes_from_params(int order, std::size_t count, const float* params, float* axes_out, float* bands_out) {
     HWY_DYNAMIC_DISPATCH(lobes_from_params)(order, count, params, axes_out, bands_out);
 }
 
+HWY_EXPORT(frames_range);
 void frames_range(const FrameTransform& transform, const NormalSources& sources, const float* positions,
                   const std::uint32_t* neighbours, std::size_t begin, std::size_t end, std::size_t stride,
                   float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts) {

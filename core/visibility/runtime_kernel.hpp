@@ -63,8 +63,8 @@ void frames_range(const FrameTransform& transform, const NormalSources& sources,
                   float* normals_out, float* tangents_out, float* positions_out, FrameCounts& counts);
 
 // Lobe parameters (count lobes of 2 + order each: Lambert X, Y, then the
-// bands) → unit axes (count × 3) and bands (count × order): pose_model.hpp's
-// params_to_lobes.
+// bands) → unit axes (count × 3) and bands (count × order): the loop of
+// pose_model.hpp's lobes_from_params, over all lobes of all its vertices.
 void lobes_from_params(int order, std::size_t count, const float* params, float* axes_out, float* bands_out);
 
 // The pose model's arrays the synthesis reads (pose_model.hpp's PoseModel).
@@ -80,16 +80,16 @@ struct PoseBlocks {
     const float* scales;                   // per block
 };
 
-// The pose model's lobe parameters of vertices [begin, end) (pose_model.hpp's
-// synthesize_range): per vertex v, bias[v] (d floats) plus, for each stored
-// joint block e, the joint's first c_e features times scales[e] times the
-// block's c_e × d binary16 weights (weight_blocks.hpp). Written from params_out[0]
-// on. On
-// targets with FMA the multiply-adds are fused (the result differs from the
-// others by float rounding). stride 0: d floats per vertex from
-// params_out[0]; otherwise d rows `stride` floats apart, vertex v in column
-// v − begin (sh::PoseBlock's layout).
-void synthesize_range(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
-                      float* params_out, std::size_t stride = 0);
+// The pose model's linear map applied to the pose's features: the lobe
+// parameters of vertices [begin, end) (pose_model.hpp's
+// synthesize_params_range and synthesize_rows). Per vertex v, bias[v] (d
+// floats) plus, for each stored joint block e, the joint's first c_e
+// features times scales[e] times the block's c_e × d binary16 weights
+// (weight_blocks.hpp). On targets with FMA the multiply-adds are fused (the
+// result differs from the others by float rounding). stride 0: d floats per
+// vertex from params_out[0]; otherwise d rows `stride` floats apart, vertex v
+// in column v − begin (sh::PoseBlock's layout).
+void apply_pose_blocks(const PoseBlocks& blocks, const float* features, std::size_t begin, std::size_t end,
+                       float* params_out, std::size_t stride = 0);
 
 }  // namespace penumbra::visibility::detail

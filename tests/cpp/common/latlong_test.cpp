@@ -59,7 +59,7 @@ TEST(LatLong, pixel_centre_to_direction_and_back_is_the_same_position) {
 
 TEST(LatLong, landmarks_centre_plus_x_edges_minus_x_quarters_plus_and_minus_y_top_up) {
     const int w = 400, h = 200;
-    const auto at = [&](double x, double y) { return direction_at(x, y, w, h); };
+    const auto at = [&](double x, double y) { return direction_at(y, x, h, w); };
     EXPECT_LT((at(200, 100) - Eigen::Vector3d::UnitX()).norm(), 1e-15);  // image centre
     EXPECT_LT((at(0, 100) + Eigen::Vector3d::UnitX()).norm(), 1e-15);    // left edge
     EXPECT_LT((at(400, 100) + Eigen::Vector3d::UnitX()).norm(), 1e-15);  // right edge
@@ -70,7 +70,7 @@ TEST(LatLong, landmarks_centre_plus_x_edges_minus_x_quarters_plus_and_minus_y_to
     // Moving right turns from +x towards −y: clockwise seen from above.
     EXPECT_LT(at(201, 100).y(), 0.0);
     // Upper hemisphere: the bottom row is the horizon.
-    EXPECT_LT((direction_at(200, 100, w, 100, upper_hemisphere) - Eigen::Vector3d::UnitX()).norm(), 1e-15);
+    EXPECT_LT((direction_at(100, 200, 100, w, upper_hemisphere) - Eigen::Vector3d::UnitX()).norm(), 1e-15);
 }
 
 TEST(LatLong, x_of_phi_wraps_into_the_image) {

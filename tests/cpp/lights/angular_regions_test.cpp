@@ -5,7 +5,7 @@
 #include <random>
 
 #include "lights/angular_regions.hpp"
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 #include "lights_test_util.hpp"
 
 namespace penumbra::lights {

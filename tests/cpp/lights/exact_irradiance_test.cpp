@@ -5,7 +5,7 @@
 #include <random>
 
 #include "lights/exact_irradiance.hpp"
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 #include "lights_test_util.hpp"
 #include "sh/point_sets.hpp"
 

@@ -11,7 +11,7 @@
 
 #include "image/image.hpp"
 #include "lights/environment.hpp"
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 
 namespace penumbra::lights::testing {
 

@@ -1,5 +1,5 @@
 // Region powers' assignment of map cells to their nearest sample
-// (lights/region_assignment.hpp) and the sums over it (lights.hpp, region
+// (lights/region_assignment.hpp) and the sums over it (frame_lights.hpp, region
 // mode), held to a brute-force search over every sample: the same nearest
 // sample for every cell (ties to the lowest index) on every SIMD target, and
 // the same powers, centroids and spreads, on random and extreme maps.
@@ -14,10 +14,10 @@
 #include <Eigen/Geometry>
 
 #include "common/latlong.hpp"
-#include "lights/lights.hpp"
+#include "common/simd_target.hpp"
+#include "lights/frame_lights.hpp"
 #include "lights/region_assignment.hpp"
 #include "lights_test_util.hpp"
-#include "sh/pose_shading.hpp"
 
 namespace penumbra::lights {
 namespace {
@@ -111,18 +111,18 @@ TEST(LightsRegionAssignment, every_cell_gets_the_brute_force_nearest_sample_on_e
     }
     cases.push_back({{96, 48, true}, random_directions(3000, 8), "3000 random (index-backed)"});
 
-    const std::vector<std::string> targets = sh::simd_targets();
+    const std::vector<std::string> targets = simd_targets();
     ASSERT_FALSE(targets.empty());
     for (const Case& c : cases) {
         const std::vector<int> expected = brute_force_owners(c.grid, c.sites);
         for (const std::string& target : targets) {
-            sh::force_simd_target(target);
+            force_simd_target(target);
             for (const int band : {16, 5})
                 EXPECT_EQ(mismatches(c.grid, c.sites, band, expected), 0)
                     << c.what << ", " << target << ", bands of " << band;
         }
     }
-    sh::force_simd_target("");
+    force_simd_target("");
 }
 
 // The region sums done the slow way: every lit cell to its brute-force

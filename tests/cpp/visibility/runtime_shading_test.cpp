@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "common/error.hpp"
+#include "common/simd_target.hpp"
 #include "sh/pose_shading.hpp"
 #include "visibility/runtime_shading.hpp"
 #include "visibility/vertex_normals.hpp"
@@ -120,14 +121,14 @@ TEST(VertexNormals, every_simd_target_gives_the_same_normals_bit_for_bit) {
     const Polygons m = bumpy_sphere(12, 37, rng);  // 37: partial batches of quads and triangles
     const PolygonMesh mesh(m.vertex_count(), m.sizes, m.loops);
     std::vector<float> first;
-    for (const std::string& target : sh::simd_targets()) {
-        sh::force_simd_target(target);
+    for (const std::string& target : simd_targets()) {
+        force_simd_target(target);
         std::vector<float> normals(m.positions.size());
         mesh.vertex_normals(m.positions.data(), normals.data(), 2);
         if (first.empty()) first = normals;
         EXPECT_EQ(normals, first) << target;
     }
-    sh::force_simd_target("");
+    force_simd_target("");
 }
 
 TEST(VertexNormals, bad_polygons_are_argument_errors) {
@@ -254,13 +255,13 @@ void expect_fused_frame_matches_separate_passes(std::mt19937_64& rng, sh::Shadin
 // computes what the separate passes do, on every SIMD target.
 TEST(RuntimeShading, fused_frame_matches_the_separate_passes_on_every_target) {
     std::mt19937_64 rng(3);
-    for (const std::string& target : sh::simd_targets()) {
-        sh::force_simd_target(target);
+    for (const std::string& target : simd_targets()) {
+        force_simd_target(target);
         for (const sh::ShadingModel shading : {sh::ShadingModel::diffuse, sh::ShadingModel::phong,
                                                sh::ShadingModel::translucent})
             expect_fused_frame_matches_separate_passes(rng, shading, target);
     }
-    sh::force_simd_target("");
+    force_simd_target("");
 }
 
 TEST(RuntimeShading, results_do_not_depend_on_thread_count) {

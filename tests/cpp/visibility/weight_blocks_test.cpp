@@ -9,7 +9,7 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
-#include "sh/pose_shading.hpp"
+#include "common/simd_target.hpp"
 #include "visibility/pose_model.hpp"
 #include "visibility/weight_blocks.hpp"
 
@@ -153,14 +153,14 @@ TEST(WeightBlocks, every_simd_target_synthesizes_the_stored_weights) {
                 expected[v * d + i] = sum;
                 size[v * d + i] = magnitude;
             }
-        for (const std::string& target : sh::simd_targets()) {
-            sh::force_simd_target(target);
+        for (const std::string& target : simd_targets()) {
+            force_simd_target(target);
             std::vector<float> params(m.vertex_count * d, -7.0f);
             synthesize_params(m, rotations.data(), params.data(), 2);
             for (std::size_t k = 0; k < params.size(); ++k)
                 ASSERT_NEAR(params[k], expected[k], 1e-5 * size[k] + 1e-30) << target << " d " << d << " value " << k;
         }
-        sh::force_simd_target("");
+        force_simd_target("");
     }
 }
 

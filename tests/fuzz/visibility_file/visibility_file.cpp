@@ -9,7 +9,7 @@
 // header, so mutations reach the payload parser instead of all stopping at
 // the checksum; a non-zero reserved field leaves the header as it is, which
 // fuzzes the header checks. Checked beyond "only penumbra::Error":
-//   - an accepted model drives synthesize_params + params_to_lobes;
+//   - an accepted model drives synthesize_params + lobes_from_params;
 //   - an accepted file written back reads back identical;
 //   - an accepted training set merged with itself has strictly ascending frames.
 #include <cmath>
@@ -37,7 +37,7 @@ void check_model(const PoseModel& m, const std::string& path) {
     std::vector<float> params(m.vertex_count * d), axes(m.vertex_count * m.lobes * 3),
         bands(m.vertex_count * m.lobes * m.order);
     synthesize_params(m, rotations.data(), params.data(), 1);
-    params_to_lobes(m.order, m.lobes, m.vertex_count, params.data(), axes.data(), bands.data());
+    lobes_from_params(m.order, m.lobes, m.vertex_count, params.data(), axes.data(), bands.data());
 
     const std::string again = path + ".again.pzh";
     write_pose_model(again, m);

@@ -1,4 +1,4 @@
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 
 #include <algorithm>
 #include <array>

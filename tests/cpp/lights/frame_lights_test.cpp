@@ -4,7 +4,7 @@
 #include <numbers>
 
 #include "common/error.hpp"
-#include "lights/lights.hpp"
+#include "lights/frame_lights.hpp"
 #include "lights_test_util.hpp"
 #include "sh/point_sets.hpp"
 
@@ -17,7 +17,7 @@ using testing::constant_image;
 
 std::vector<Eigen::Vector3d> normals(int n) { return sh::fibonacci_sphere(n).directions; }
 
-TEST(LightsLights, exact_irradiance_matches_closed_forms) {
+TEST(LightsFrameLights, exact_irradiance_matches_closed_forms) {
     // Uniform sphere of radiance 1: E = π for every normal.
     const EnvironmentMap sphere = as_map(constant_image(256, 128, 1, 1, 1));
     const Eigen::MatrixXd e = exact_irradiance(sphere, normals(50));
@@ -30,7 +30,7 @@ TEST(LightsLights, exact_irradiance_matches_closed_forms) {
     EXPECT_NEAR(h(2, 1), 0.0, 1e-12);
 }
 
-TEST(LightsLights, region_lights_sum_exactly_to_the_map_integral) {
+TEST(LightsFrameLights, region_lights_sum_exactly_to_the_map_integral) {
     const Image im = testing::sky_and_sun(256, 128, 0.5, Eigen::Vector3d(0.3, -0.5, 0.6), 0.05, 2000.0);
     const EnvironmentMap map = as_map(im);
     for (auto sampler : {SamplerKind::havran, SamplerKind::standard})
@@ -54,7 +54,7 @@ TEST(LightsLights, region_lights_sum_exactly_to_the_map_integral) {
         }
 }
 
-TEST(LightsLights, a_sun_disc_gets_its_closed_form_power_and_irradiance) {
+TEST(LightsFrameLights, a_sun_disc_gets_its_closed_form_power_and_irradiance) {
     const Eigen::Vector3d sun = Eigen::Vector3d(0.2, 0.4, 0.9).normalized();
     const double radius = 0.03, radiance = 1e5;
     const EnvironmentMap map = as_map(testing::sky_and_sun(2048, 1024, 0.0, sun, radius, radiance));
@@ -74,7 +74,7 @@ TEST(LightsLights, a_sun_disc_gets_its_closed_form_power_and_irradiance) {
     EXPECT_NEAR(x(1, 0), f.total_power * sun.z(), 2e-3 * f.total_power);
 }
 
-TEST(LightsLights, uniform_sky_irradiance_converges_with_the_count) {
+TEST(LightsFrameLights, uniform_sky_irradiance_converges_with_the_count) {
     const EnvironmentMap map = as_map(constant_image(256, 128, 1, 1, 1));
     const auto ns = normals(200);
     const Eigen::MatrixXd ref = exact_irradiance(map, ns);
@@ -90,7 +90,7 @@ TEST(LightsLights, uniform_sky_irradiance_converges_with_the_count) {
     EXPECT_LT(previous, 0.01);
 }
 
-TEST(LightsLights, equal_mode_is_progressive_directions_never_move) {
+TEST(LightsFrameLights, equal_mode_is_progressive_directions_never_move) {
     const EnvironmentMap map = as_map(testing::sky_and_sun(128, 64, 1.0, Eigen::Vector3d(1, 1, 1), 0.2, 50.0));
     LightOptions o;
     o.power = PowerMode::equal;
@@ -108,7 +108,7 @@ TEST(LightsLights, equal_mode_is_progressive_directions_never_move) {
     for (int k = 0; k < 32; ++k) EXPECT_EQ(c.lights[k].sample_direction, d.lights[k].sample_direction);
 }
 
-TEST(LightsLights, black_frame_single_pixel_and_bad_counts) {
+TEST(LightsFrameLights, black_frame_single_pixel_and_bad_counts) {
     LightOptions o;
     o.count = 16;
     o.fit_irradiance = false;  // where region and equal powers put the lights
@@ -139,7 +139,7 @@ TEST(LightsLights, black_frame_single_pixel_and_bad_counts) {
     EXPECT_THROW(compute_lights(m, o), ArgumentError);
 }
 
-TEST(LightsLights, hemispherical_input_gives_lights_over_the_upper_hemisphere) {
+TEST(LightsFrameLights, hemispherical_input_gives_lights_over_the_upper_hemisphere) {
     const EnvironmentMap map = as_map(constant_image(360, 90, 1, 1, 1), Projection::hemisphere_polar);
     for (auto sampler : {SamplerKind::havran, SamplerKind::standard}) {
         LightOptions o;
@@ -149,7 +149,7 @@ TEST(LightsLights, hemispherical_input_gives_lights_over_the_upper_hemisphere) {
     }
 }
 
-TEST(LightsLights, adaptive_count_meets_the_tolerance_with_fewer_lights_when_looser) {
+TEST(LightsFrameLights, adaptive_count_meets_the_tolerance_with_fewer_lights_when_looser) {
     const EnvironmentMap map = as_map(testing::sky_and_sun(256, 128, 0.3, Eigen::Vector3d(0.5, 0.1, 0.6), 0.1, 30.0));
     LightOptions o;
     const AdaptiveResult loose = adaptive_count(map, o, 0.05, 512);
