@@ -168,7 +168,7 @@ std::vector<JointChoice> choose_active_joints(const TrainingSet& set, const std:
 }
 
 void check_pose_model(const PoseModel& m) {
-    if (m.order < 1 || m.order > 8) throw ArgumentError("model SH order out of range");
+    if (m.order < 1 || m.order > max_sh_order) throw ArgumentError("model SH order out of range");
     if (m.lobes < 1 || m.lobes > max_lobes) throw ArgumentError("model lobe count out of range");
     if (m.features != PoseFeatures::RotationMatrix && m.features != PoseFeatures::RotationVector)
         throw ArgumentError("model pose features unknown");
