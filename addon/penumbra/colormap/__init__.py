@@ -6,14 +6,14 @@ sidebar section is panel.py (registered by ../panels.py)."""
 if "bpy" in locals():
     import importlib
     for _name in ("interface", "settings", "ramp", "noise_statistics", "noise_model", "node_groups", "sample_count",
-                  "operators", "surface_filter", "panel"):
+                  "material", "operators", "surface_filter", "panel"):
         if _name in locals():
             importlib.reload(locals()[_name])
 
 import bpy  # noqa: E402
 
 from . import interface, settings, ramp, noise_statistics, noise_model, node_groups  # noqa: E402,F401
-from . import sample_count, operators, panel  # noqa: E402,F401
+from . import sample_count, material, operators, panel  # noqa: E402,F401
 from . import surface_filter  # noqa: E402
 
 # Registered before the scene's `penumbra` group, which points at SceneSettings.

@@ -15,27 +15,11 @@ import bpy
 import numpy as np
 
 from . import node_groups, noise_model, noise_statistics, ramp as ramp_io, sample_count
+from .material import BakeError, Rollback, editable_material
+from .surface_filter import filters_of
 from .. import color, modal_job, native, world
-from ..compat import socket_is, uses_nodes
+from ..compat import socket_is
 from ..errors import describe
-
-
-class BakeError(ValueError):
-    """A problem the user can fix; its message goes to the operator report
-    (a ValueError, like the core's bad input: errors.CORE_ERRORS)."""
-
-
-def _editable_material(context):
-    obj = context.object
-    material = getattr(context, "material", None) or (obj.active_material if obj else None)
-    if material is None:
-        raise BakeError("No active material: select an object with a material")
-    if material.library is not None:
-        raise BakeError(f"Material '{material.name}' is linked from the library '{material.library.filepath}' "
-                        "and is read-only: make it local first (nothing was changed)")
-    if not uses_nodes(material):
-        raise BakeError(f"Material '{material.name}' does not use nodes: there is no ColorRamp to filter")
-    return material
 
 
 def _pixel_size(scene):
@@ -172,7 +156,7 @@ class BakePlan:
         self.name = bpy.path.clean_name(image.name)
 
     def _plan_ramp(self, context):
-        self.material = _editable_material(context)
+        self.material = editable_material(context)
         tree = self.material.node_tree
         node = tree.nodes.active
         if node is None or node.bl_idname != "ShaderNodeValToRGB":
@@ -299,14 +283,16 @@ class BakePlan:
         """Writes the files and edits the tree; if anything fails, puts the
         tree, the data blocks and the output folder back as they were."""
         self.recheck()
-        rollback = _Rollback(self)
+        rollback = Rollback(self.material.node_tree if self.node is not None else None, self.node)
+        files = _LookupFiles(self)
         try:
             return self._apply(lut)
         except BaseException:
             rollback.restore()
+            files.restore()
             raise
         finally:
-            rollback.discard_backups()
+            files.discard_backups()
 
     def lookup_paths(self):
         exr = os.path.join(self.folder, f"{self.name}_lut.exr")
@@ -389,21 +375,13 @@ class BakePlan:
             tree.links.new(noise_filter.outputs[name], group_node.inputs[name])
 
 
-class _Rollback:
-    """What apply() may change, recorded before it starts: the tree's nodes,
-    links and the ramp's state, the image and node-group data blocks, and the
-    output folder (new files are removed, overwritten lookups restored). The
-    lookups are moved aside and back by _penumbra.replace_file_durably, so
-    that after a power cut a backup, or a restored lookup, is really there."""
+class _LookupFiles:
+    """The output folder as apply() found it: new files are removed and
+    overwritten lookups restored after a failure. The lookups are moved
+    aside and back by _penumbra.replace_file_durably, so that after a power
+    cut a backup, or a restored lookup, is really there."""
 
     def __init__(self, plan):
-        self.tree = plan.material.node_tree if plan.node is not None else None
-        self.ramp = plan.node
-        self.nodes = {n.name for n in self.tree.nodes} if self.tree else set()
-        self.links = [(l.from_socket, l.to_socket) for l in self.tree.links] if self.tree else []
-        self.ramp_state = (plan.node.mute, plan.node.label, tuple(plan.node.location)) if plan.node else None
-        self.images = set(bpy.data.images[:])
-        self.groups = set(bpy.data.node_groups[:])
         self.folder = plan.folder
         self.created_folder = not os.path.isdir(self.folder)
         self.files = set() if self.created_folder else set(os.listdir(self.folder))
@@ -415,25 +393,16 @@ class _Rollback:
                 self.backups[path] = backup
 
     def restore(self):
-        if self.tree is not None:
-            for node in [n for n in self.tree.nodes if n.name not in self.nodes]:
-                sample_count.remove_driver(node)
-                self.tree.nodes.remove(node)
-            for from_socket, to_socket in self.links:
-                if not any(l.from_socket == from_socket for l in to_socket.links):
-                    self.tree.links.new(from_socket, to_socket)
-            self.ramp.mute, self.ramp.label, self.ramp.location = self.ramp_state
-        for group in [g for g in bpy.data.node_groups if g not in self.groups]:
-            bpy.data.node_groups.remove(group)
-        for image in [i for i in bpy.data.images if i not in self.images]:
-            bpy.data.images.remove(image)
+        """After the material's Rollback.restore: the images left are the
+        ones from before, and one that showed an overwritten lookup is
+        reloaded from the restored file."""
         if os.path.isdir(self.folder):
             for name in set(os.listdir(self.folder)) - self.files:
                 if not name.endswith(".penumbra-backup"):
                     os.remove(os.path.join(self.folder, name))
         for path, backup in self.backups.items():
             native.require().replace_file_durably(backup, path)
-            for image in self.images:  # an earlier lookup reloaded from the new file
+            for image in bpy.data.images:
                 if image.filepath and os.path.normpath(bpy.path.abspath(image.filepath)) == path:
                     image.reload()
         self.backups = {}
@@ -492,7 +461,7 @@ class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            material = _editable_material(context)
+            material = editable_material(context)
         except BakeError as error:
             self.report({"ERROR"}, describe(error))
             return {"CANCELLED"}
@@ -504,7 +473,6 @@ class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):
             self.report({"ERROR"}, f"The active node of '{material.name}' is {what}, not a Penumbra Filtered Ramp: "
                                    "click the filtered ramp whose ColorRamp should come back")
             return {"CANCELLED"}
-        from .surface_filter import filters_of   # it imports this module
         covering = filters_of(tree, group_node)
         if covering:
             # The filter reads the lookup through this group: restoring under
