@@ -1,6 +1,6 @@
 """penumbra.add_surface_filter: put the height- or slope-correlated filter of
-a baked colour map (paper Sec. 5.1 / 5.2; node_groups.height_ramp_group /
-slope_ramp_group) in place of a "Penumbra Filtered Ramp", and
+a baked colour map (paper Sec. 5.1 / 5.2; height_ramp.height_ramp_group /
+slope_ramp.slope_ramp_group) in place of a "Penumbra Filtered Ramp", and
 penumbra.remove_surface_filter to put the filtered ramp back.
 
 What the operator does, on the active material's node tree:
@@ -51,7 +51,7 @@ import os
 
 import bpy
 
-from . import node_groups
+from . import height_ramp, microsurface, node_groups, slope_ramp
 from .material import BakeError, Rollback, active_material, editable_material
 from .. import node_links, world
 from ..errors import CORE_ERRORS, describe
@@ -229,8 +229,8 @@ def _add_filter(op, context, tree, ramp, replaced):
     image, spec = lookup_of(ramp)
     # The groups read the microsurface table by name; written beside the
     # lookup (not in the session's temporary folder) it survives a reload.
-    node_groups.microsurface_image(_lookup_folder(image))
-    build = node_groups.height_ramp_group if kind == "HEIGHT" else node_groups.slope_ramp_group
+    microsurface.microsurface_image(_lookup_folder(image))
+    build = height_ramp.height_ramp_group if kind == "HEIGHT" else slope_ramp.slope_ramp_group
     group = build(image, spec)
     node = tree.nodes.new("ShaderNodeGroup")
     node.node_tree = group
