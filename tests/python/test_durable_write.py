@@ -73,7 +73,7 @@ def test_a_rig_json_is_fsynced_renamed_then_its_folder_fsynced(tmp_path, steps):
 
 
 def test_a_colormap_backup_and_its_restore_are_fsynced_and_their_folder_too(tmp_path, steps):
-    # colormap/operators.py's _Rollback moves an overwritten lookup aside and back.
+    # colormap/operators.py's _LookupFiles moves an overwritten lookup aside and back.
     path, backup = str(tmp_path / "lookup.exr"), str(tmp_path / "lookup.exr.penumbra-backup")
     open(path, "wb").write(b"old lookup")
     p.replace_file_durably(path, backup)

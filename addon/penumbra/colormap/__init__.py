@@ -5,16 +5,20 @@ sidebar section is panel.py (registered by ../panels.py)."""
 
 if "bpy" in locals():
     import importlib
-    for _name in ("interface", "settings", "ramp", "noise_statistics", "noise_model", "node_groups", "sample_count",
-                  "operators", "surface_filter", "panel"):
+    for _name in ("interface", "settings", "ramp", "node_groups", "noise_maths", "table_image", "node_builder",
+                  "lookup_layout", "noise_statistics", "noise_model", "noise_nodes", "filtered_ramp", "footprint",
+                  "noise_filter", "microsurface", "height_ramp", "slope_ramp", "sample_count", "material",
+                  "surface_filter", "operators", "panel"):
         if _name in locals():
             importlib.reload(locals()[_name])
 
 import bpy  # noqa: E402
 
-from . import interface, settings, ramp, noise_statistics, noise_model, node_groups  # noqa: E402,F401
-from . import sample_count, operators, panel  # noqa: E402,F401
-from . import surface_filter  # noqa: E402
+# In the order they import each other (a reload goes the same way).
+from . import interface, settings, ramp, node_groups, noise_maths, table_image, node_builder  # noqa: E402,F401
+from . import lookup_layout, noise_statistics, noise_model, noise_nodes  # noqa: E402,F401
+from . import filtered_ramp, footprint, noise_filter, microsurface, height_ramp, slope_ramp  # noqa: E402,F401
+from . import sample_count, material, surface_filter, operators, panel  # noqa: E402,F401
 
 # Registered before the scene's `penumbra` group, which points at SceneSettings.
 settings_classes = settings.classes

@@ -1,5 +1,6 @@
 """Node-group sockets through both of Blender's APIs: 3.x `group.inputs` /
-`group.outputs`, 4.x `group.interface.new_socket`. Everything else about
+`group.outputs`, 4.x `group.interface.new_socket`, and a node's inputs by
+identifier, which 4.x needs for unavailable sockets. Everything else about
 node groups is the same in 3.4 and 4.5."""
 
 import bpy
@@ -30,3 +31,13 @@ def socket_names(group, in_out):
         return [item.name for item in group.interface.items_tree
                 if getattr(item, "item_type", "SOCKET") == "SOCKET" and item.in_out == in_out]
     return [s.name for s in (group.inputs if in_out == "INPUT" else group.outputs)]
+
+
+def input_socket(node, identifier):
+    """The input socket with this identifier, or None. Looking an input up by
+    name fails in 4.x for a socket the node's settings make unavailable (W of
+    3D noise, Offset of fBm), so search the identifiers."""
+    for socket in node.inputs:
+        if socket.identifier == identifier:
+            return socket
+    return None

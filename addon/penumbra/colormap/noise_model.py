@@ -8,8 +8,8 @@ Scale·lacunarity^i, evaluated at the noise's own, possibly distorted, position.
 read_noise() turns a Noise Texture (Blender 3.4 and 4.x/5.x) or a Musgrave
 Texture (3.x; 4.1 folded it into the Noise Texture's types) into a NoiseModel,
 or raises NoiseNotDerivable naming the node and the setting that makes that
-impossible. distorted_vector() and octave_fac() build the node arithmetic
-that rebuilds each octave, distortion included.
+impossible. The model's maths is noise_maths.py; noise_nodes.py builds the
+node arithmetic that rebuilds each octave, distortion included.
 
 Blender's definitions (Cycles intern/cycles/kernel/svm/, tags v3.4.0 and
 v4.5.0 and branch release/5.2 of blender/cycles; blenlib's noise.cc, which
@@ -25,7 +25,7 @@ about [−1, 1], noise.h), p = Vector·Scale (1D: W·Scale; 4D: (Vector, W)·Sca
   noise_fbm): Detail clamped to [0, 15], n = ⌊Detail⌋, f = Detail − n;
   octave i ≤ n is s(lacunarity^i·p) with amplitude r^i, octave n + 1 (if
   f ≠ 0) with f·r^(n+1). Normalized: 0.5 + 0.5·mix(Σ/M_n, Σ'/M_(n+1), f)
-  (noise_statistics.octave_weights). Unnormalized (4.x `normalize` off):
+  (noise_maths.octave_weights). Unnormalized (4.x `normalize` off):
   Σ_(i≤n) r^i s_i + f r^(n+1) s_(n+1), so c_i = 2 r^i, offset 0. 3.4 clamps
   the Roughness r to [0, 1] and has lacunarity 2; 4.x clamps r to ≥ 0 only.
 - Musgrave fBm (3.4 musgrave.h noise_musgrave_fBm_*d, svm_node_tex_musgrave):
@@ -36,20 +36,17 @@ about [−1, 1], noise.h), p = Vector·Scale (1D: W·Scale; 4D: (Vector, W)·Sca
   ridged multifractal (|s|²) are nonlinear; only their one-octave settings
   are linear (see _one_octave_noise, _one_octave_musgrave)."""
 
-import dataclasses
 import math
-import struct
-from collections import namedtuple
 
 import bpy
 
-from . import noise_statistics
+from . import interface, noise_maths
+from .noise_maths import NoiseModel
 from .. import node_links
 
 NOISE = "ShaderNodeTexNoise"
 MUSGRAVE = "ShaderNodeTexMusgrave"
 _LABELS = {NOISE: "Noise Texture", MUSGRAVE: "Musgrave Texture"}
-_AXES = {"1D": 1, "2D": 2, "3D": 3, "4D": 4}
 # The inputs the filter takes as links (group inputs); any other input that
 # shapes the value must be a number the model can read.
 LINKABLE = ("Vector", "W", "Scale")
@@ -59,123 +56,6 @@ _FROM_IMAGE = "bake the lookup from an image of the colour map instead (Bake Fil
 class NoiseNotDerivable(Exception):
     """The noise's per-pixel mean and spread can't be derived from its
     settings; the message names the node and the setting."""
-
-
-@dataclasses.dataclass(frozen=True)
-class NoiseModel:
-    """value = offset + Σ c_i (Fac_i − 0.5), Fac_i the normalized Detail-0
-    Noise Texture at Scale·lacunarity^i on the distorted position.
-
-    scale / w: the input's value, None when it is driven (then scale_from /
-    w_from hold the output socket that really drives it, node_links.feed, in
-    the ramp's tree, which the filter takes as a link; vector_from likewise,
-    None for the implicit coordinates)."""
-    node_name: str
-    node_type: str              # NOISE or MUSGRAVE
-    noise_type: str             # 'FBM', 'MULTIFRACTAL', ... (Blender's enum)
-    dimensions: str             # '1D', '2D', '3D', '4D'
-    offset: float
-    coefficients: tuple
-    lacunarity: float
-    distortion: float
-    scale: object = None
-    w: object = None
-    vector_from: object = None
-    scale_from: object = None
-    w_from: object = None
-
-    @property
-    def axes(self):
-        return _AXES[self.dimensions]
-
-    @property
-    def uses_vector(self):
-        return self.dimensions != "1D"
-
-    @property
-    def uses_w(self):
-        return self.dimensions in ("1D", "4D")
-
-    @property
-    def mean_min(self):
-        """Lowest value the noise (and its mean) can take: every octave at −1."""
-        return self.offset - 0.5 * sum(abs(c) for c in self.coefficients)
-
-    @property
-    def mean_max(self):
-        return self.offset + 0.5 * sum(abs(c) for c in self.coefficients)
-
-    @property
-    def total_weight_sq(self):
-        """Σ c_i²: the value's variance is this times one octave's."""
-        return sum(c * c for c in self.coefficients)
-
-    def distortion_offsets(self):
-        """Blender's constant offsets o_k (k < axes), each a tuple of `axes`
-        floats: component k of p moves by distortion·snoise(p + o_k)."""
-        return tuple(random_offset(float(k), self.axes) for k in range(self.axes))
-
-
-# ---- Blender's hash (Cycles util/hash.h, blenlib BLI_hash.hh) -------------
-
-def _rot(x, k):
-    return ((x << k) | (x >> (32 - k))) & 0xFFFFFFFF
-
-
-def _final(a, b, c):
-    """Jenkins lookup3 final(a, b, c); returns c."""
-    m = 0xFFFFFFFF
-    c ^= b
-    c = (c - _rot(b, 14)) & m
-    a ^= c
-    a = (a - _rot(c, 11)) & m
-    b ^= a
-    b = (b - _rot(a, 25)) & m
-    c ^= b
-    c = (c - _rot(b, 16)) & m
-    a ^= c
-    a = (a - _rot(c, 4)) & m
-    b ^= a
-    b = (b - _rot(a, 14)) & m
-    c ^= b
-    c = (c - _rot(b, 24)) & m
-    return c
-
-
-def hash_uint(kx):
-    a = b = c = (0xDEADBEEF + (1 << 2) + 13) & 0xFFFFFFFF
-    a = (a + kx) & 0xFFFFFFFF
-    return _final(a, b, c)
-
-
-def hash_uint2(kx, ky):
-    a = b = c = (0xDEADBEEF + (2 << 2) + 13) & 0xFFFFFFFF
-    b = (b + ky) & 0xFFFFFFFF
-    a = (a + kx) & 0xFFFFFFFF
-    return _final(a, b, c)
-
-
-def _float_bits(x):
-    return struct.unpack("<I", struct.pack("<f", x))[0]
-
-
-def _f32(x):
-    return struct.unpack("<f", struct.pack("<f", x))[0]
-
-
-def _offset_component(hashed):
-    """100 + 100·uint_to_float_incl(hashed) in float arithmetic:
-    (float)n · (1 / (float)0xFFFFFFFF), and 1/(float)0xFFFFFFFF is 2^-32."""
-    unit = _f32(_f32(float(hashed)) * 2.0 ** -32)
-    return _f32(100.0 + _f32(unit * 100.0))
-
-
-def random_offset(seed, axes):
-    """random_float_offset(seed) (1D: a 1-tuple) or random_float{2,3,4}_offset
-    (noisetex.h): component k = 100 + 100·hash_float2_to_float(seed, k)."""
-    if axes == 1:
-        return (_offset_component(hash_uint(_float_bits(seed))),)
-    return tuple(_offset_component(hash_uint2(_float_bits(seed), _float_bits(float(k)))) for k in range(axes))
 
 
 # ---- reading the node ------------------------------------------------------
@@ -196,7 +76,7 @@ def _wireable_link(node, identifier, path):
     texture's own Vector then means its implicit coordinates). Raises
     NoiseNotDerivable when the filter cannot link it: a driver inside a
     node group, or a Vector that is one constant point."""
-    socket = _input(node, identifier)
+    socket = interface.input_socket(node, identifier)
     if socket is None:
         return None
     fed = node_links.feed(socket, path)
@@ -253,20 +133,10 @@ def _check_texture_mapping(node):
             "and the filter does not apply it; reset it and use a Mapping node on the Vector instead")
 
 
-def _input(node, identifier):
-    """The input socket with this identifier, or None. Looking an input up by
-    name fails in 4.x for a socket the node's settings make unavailable (W of
-    3D noise, Offset of fBm), so search the identifiers."""
-    for socket in node.inputs:
-        if socket.identifier == identifier:
-            return socket
-    return None
-
-
 def _value(node, identifier, path, default=0.0):
     """An undriven input's value: its own, or that of the input it stands for
     (a group node's input behind a Group Input; node_links.Feed.socket)."""
-    socket = _input(node, identifier)
+    socket = interface.input_socket(node, identifier)
     return float(node_links.feed(socket, path).socket.default_value) if socket is not None else default
 
 
@@ -327,7 +197,7 @@ def _noise_terms(node, noise_type, type_label, path):
     if noise_type != "FBM":
         return _one_octave_noise(node, noise_type, type_label, detail, roughness, path) + (lacunarity,)
     if getattr(node, "normalize", True):
-        return 0.5, noise_statistics.octave_weights(detail, roughness), lacunarity
+        return 0.5, noise_maths.octave_weights(detail, roughness, bpy.app.version), lacunarity
     n = int(math.floor(detail))
     f = detail - n
     coefficients = [2.0 * roughness ** i for i in range(n + 1)]
@@ -376,74 +246,3 @@ def _one_octave_musgrave(node, noise_type, type_label, octaves, n, f, path):
     if noise_type == "HETERO_TERRAIN" and n <= 1 and f == 0.0:
         return base, [2.0]
     raise _nonlinear(node, type_label, octaves, " (or Detail 1 or less for a single octave)")
-
-
-# ---- rebuilding the octaves with nodes -------------------------------------
-
-Coordinates = namedtuple("Coordinates", "vector w")
-Coordinates.__doc__ = """Where the octaves are evaluated, in the noise's own units
-(before Scale): Vector and W, each a socket or a constant."""
-
-
-def configure_octave_node(noise_node, model):
-    """Set a Noise Texture node up as one octave of `model`: its dimensions,
-    fBm, normalized, Detail 0, Distortion 0, the noise's lacunarity (unused at
-    Detail 0) and its W value where W is a constant. The caller links
-    Vector (and W) and sets Scale = model scale · lacunarity^i."""
-    noise_node.noise_dimensions = model.dimensions
-    if hasattr(noise_node, "noise_type"):
-        noise_node.noise_type = "FBM"
-    if hasattr(noise_node, "normalize"):
-        noise_node.normalize = True
-    settings = {"Detail": 0.0, "Distortion": 0.0, "Lacunarity": model.lacunarity}
-    if model.w is not None:
-        settings["W"] = model.w
-    for identifier, value in settings.items():
-        socket = _input(noise_node, identifier)
-        if socket is not None:  # 3.4 has no Lacunarity
-            socket.default_value = value
-    return noise_node
-
-
-def octave_fac(b, coordinates, scale, model):
-    """A Detail-0 octave of `model` at `coordinates` with Scale `scale`
-    (socket or number): its Fac output. `b` is node_groups._Builder."""
-    node = configure_octave_node(b._place(b.nodes.new(NOISE)), model)
-    if model.uses_vector:
-        b.connect(coordinates.vector, _input(node, "Vector"))
-    if model.uses_w:
-        b.connect(coordinates.w, _input(node, "W"))
-    b.connect(scale, _input(node, "Scale"))
-    return node.outputs["Fac"]
-
-
-def distorted_vector(b, vector, scale, model, w=None):
-    """Coordinates(Vector', W') such that a Detail-0 Noise Texture there with
-    Scale·lacunarity^i is octave i of the distorted noise:
-    Vector' = Vector + d·(s_0, s_1, s_2)/Scale (W' = W + d·s_3/Scale in 4D,
-    W + d·s_0/Scale in 1D), s_k = snoise(p + o_k), p = Vector·Scale. Each
-    s_k is 2·Fac − 1 of a normalized Detail-0 Noise Texture at Scale 1 on
-    p + o_k, the same float operations as Blender's (noisetex.h). `vector`,
-    `scale` and `w` (None: the model's W) are sockets or constants."""
-    w = model.w if w is None else w
-    if model.distortion == 0.0:
-        return Coordinates(vector, w)
-    p = b.vscale(vector, scale) if model.uses_vector else None
-    pw = b.math("MULTIPLY", w, scale) if model.uses_w else None
-    signed = []
-    for o in model.distortion_offsets():
-        shifted = Coordinates(b.vmath("ADD", p, _padded(o[:3])) if p is not None else None,
-                              b.math("ADD", pw, o[-1]) if pw is not None else None)
-        signed.append(b.math("MULTIPLY_ADD", octave_fac(b, shifted, 1.0, model), 2.0, -1.0))
-    step = b.math("DIVIDE", model.distortion, scale)
-    vector_out, w_out = vector, w
-    if model.uses_vector:
-        moves = (signed[:3] + [0.0, 0.0])[:3]  # 2D: no move along z
-        vector_out = b.vmath("ADD", vector, b.vscale(b.combine(*moves), step))
-    if model.uses_w:
-        w_out = b.math("MULTIPLY_ADD", signed[-1], step, w)
-    return Coordinates(vector_out, w_out)
-
-
-def _padded(values):
-    return tuple(values) + (0.0,) * (3 - len(values))

@@ -11,6 +11,9 @@ import os
 import bpy
 import numpy as np
 
+from . import noise_maths
+from .table_image import table_image
+
 _PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "noise_statistics.json")
 _data = None
 
@@ -63,7 +66,6 @@ def statistics(detail, roughness):
 
 def statistics_image(detail, roughness, folder=None):
     """The 1D image a node group samples ('Non-Color', EXTEND), one per setting."""
-    from . import node_groups
     name = f"Penumbra Noise Statistics d{detail:g} r{roughness:g}"
     stats = statistics(detail, roughness)
     n = len(stats["log2_footprint"])
@@ -71,7 +73,7 @@ def statistics_image(detail, roughness, folder=None):
     pixels[0, :, 0] = stats["rho"]
     pixels[0, :, 1] = stats["sigma"]
     pixels[0, :, 2] = stats["mean"]
-    return node_groups.table_image(name, pixels, folder), stats
+    return table_image(name, pixels, folder), stats
 
 
 def pixel_filter_stddev(scene):
@@ -98,29 +100,6 @@ def pixel_filter_stddev(scene):
 
 # ---- octave-wise filter (docs/colormap.md, "Octave filter") ---------------
 
-def octave_weights(detail, roughness):
-    """Weights w_i of Blender's normalized fBm: Fac = Σ w_i Fac_i, Fac_i the
-    Noise Texture at Detail 0 and Scale·lacunarity^i (Σ w_i = 1). Integer
-    detail n: w_i = r^i / M_n (M_n = Σ_{k<=n} r^k); fractional detail n + f
-    blends the n- and (n+1)-octave sums: w_i = r^i ((1−f)/M_n + f/M_{n+1}),
-    w_{n+1} = f r^{n+1} / M_{n+1} (Cycles' noise_fbm, Blender 3.4 and 4.x;
-    3.4 clamps roughness to [0, 1], detail to [0, 15])."""
-    detail = min(max(float(detail), 0.0), 15.0)
-    r = float(roughness)
-    if bpy.app.version < (4, 0, 0):
-        r = min(max(r, 0.0), 1.0)
-    n = int(math.floor(detail))
-    f = detail - n
-
-    def amplitude_sum(k):
-        return sum(r ** i for i in range(k + 1))
-
-    weights = [r ** i * ((1.0 - f) / amplitude_sum(n) + f / amplitude_sum(n + 1)) for i in range(n + 1)]
-    if f > 0.0:
-        weights.append(f * r ** (n + 1) / amplitude_sum(n + 1))
-    return weights
-
-
 def octave_table():
     """dict(log2_footprint, log2_elongation, q [elongation][footprint],
     total_var): one octave's within-footprint variance fraction, measured."""
@@ -136,7 +115,6 @@ def octave_table():
 def octave_image(folder=None):
     """The table as an image (x: log2 of the footprint's minor standard
     deviation in octave units, y: log2 major/minor; R = q clamped to [0, 1])."""
-    from . import node_groups
     table = octave_table()
     q = np.clip(np.asarray(table["q"], np.float32), 0.0, 1.0)
     pixels = np.ones(q.shape + (4,), np.float32)
@@ -144,10 +122,10 @@ def octave_image(folder=None):
     pixels[..., 1] = q
     pixels[..., 2] = q
     # table_image takes rows bottom-up: row 0 (elongation 1) is the bottom, v = 0.
-    return node_groups.table_image("Penumbra Noise Octave Statistics", pixels, folder), table
+    return table_image("Penumbra Noise Octave Statistics", pixels, folder), table
 
 
 def filtered_sigma_max(detail, roughness):
     """Largest σ the octave filter produces: every octave averaged out."""
     total = octave_table()["total_var"]
-    return math.sqrt(total * sum(w * w for w in octave_weights(detail, roughness)))
+    return math.sqrt(total * sum(w * w for w in noise_maths.octave_weights(detail, roughness, bpy.app.version)))

@@ -14,28 +14,13 @@ import tempfile
 import bpy
 import numpy as np
 
-from . import node_groups, noise_model, noise_statistics, ramp as ramp_io, sample_count
+from . import filtered_ramp, footprint, noise_filter, noise_maths, noise_model, noise_statistics
+from . import node_groups, ramp as ramp_io, sample_count
+from .material import BakeError, Rollback, editable_material
+from .surface_filter import filters_of
 from .. import color, modal_job, native, world
-from ..compat import socket_is, uses_nodes
+from ..compat import socket_is
 from ..errors import describe
-
-
-class BakeError(ValueError):
-    """A problem the user can fix; its message goes to the operator report
-    (a ValueError, like the core's bad input: errors.CORE_ERRORS)."""
-
-
-def _editable_material(context):
-    obj = context.object
-    material = getattr(context, "material", None) or (obj.active_material if obj else None)
-    if material is None:
-        raise BakeError("No active material: select an object with a material")
-    if material.library is not None:
-        raise BakeError(f"Material '{material.name}' is linked from the library '{material.library.filepath}' "
-                        "and is read-only: make it local first (nothing was changed)")
-    if not uses_nodes(material):
-        raise BakeError(f"Material '{material.name}' does not use nodes: there is no ColorRamp to filter")
-    return material
 
 
 def _pixel_size(scene):
@@ -172,7 +157,7 @@ class BakePlan:
         self.name = bpy.path.clean_name(image.name)
 
     def _plan_ramp(self, context):
-        self.material = _editable_material(context)
+        self.material = editable_material(context)
         tree = self.material.node_tree
         node = tree.nodes.active
         if node is None or node.bl_idname != "ShaderNodeValToRGB":
@@ -220,10 +205,10 @@ class BakePlan:
         if warning:
             self.warnings.append(warning)
         self.filter_stddev = noise_statistics.pixel_filter_stddev(context.scene)
-        self.taps = node_groups.tap_count(model, context.scene.render.engine)
-        if self.taps < node_groups.TAP_COUNT:
-            self.warnings.append(f"EEVEE: the noise filter uses {self.taps} taps, not {node_groups.TAP_COUNT} "
-                                 f"({node_groups.noise_evaluations_per_tap(model)} Noise evaluations per tap: "
+        self.taps = noise_maths.tap_count(model, context.scene.render.engine)
+        if self.taps < noise_maths.TAP_COUNT:
+            self.warnings.append(f"EEVEE: the noise filter uses {self.taps} taps, not {noise_maths.TAP_COUNT} "
+                                 f"({noise_maths.noise_evaluations_per_tap(model)} Noise evaluations per tap: "
                                  "Detail and Distortion), so that EEVEE can compile the material; bake again "
                                  "after switching to Cycles for the full filter")
 
@@ -299,14 +284,16 @@ class BakePlan:
         """Writes the files and edits the tree; if anything fails, puts the
         tree, the data blocks and the output folder back as they were."""
         self.recheck()
-        rollback = _Rollback(self)
+        rollback = Rollback(self.material.node_tree if self.node is not None else None, self.node)
+        files = _LookupFiles(self)
         try:
             return self._apply(lut)
         except BaseException:
             rollback.restore()
+            files.restore()
             raise
         finally:
-            rollback.discard_backups()
+            files.discard_backups()
 
     def lookup_paths(self):
         exr = os.path.join(self.folder, f"{self.name}_lut.exr")
@@ -315,11 +302,11 @@ class BakePlan:
     def _apply(self, lut):
         image, path = self.write_and_load(lut)
         if self.node is None:
-            group = node_groups.filtered_ramp_group(image, self.spec)
+            group = filtered_ramp.filtered_ramp_group(image, self.spec)
             return {"image": image, "path": path, "group": group, "node": None}
         tree = self.material.node_tree
         ramp = self.node
-        group = node_groups.filtered_ramp_group(image, self.spec, mixture=self.noise is not None)
+        group = filtered_ramp.filtered_ramp_group(image, self.spec, mixture=self.noise is not None)
         group_node = tree.nodes.new("ShaderNodeGroup")
         group_node.node_tree = group
         group_node.name = group_node.label = node_groups.FILTERED_RAMP
@@ -346,64 +333,56 @@ class BakePlan:
 
     def _wire_noise(self, tree, group_node, source):
         octave_image, table = noise_statistics.octave_image(self.folder)
-        noise_filter = tree.nodes.new("ShaderNodeGroup")
-        noise_filter.node_tree = node_groups.noise_filter_group(octave_image, table, self.noise_model,
+        filter_node = tree.nodes.new("ShaderNodeGroup")
+        filter_node.node_tree = noise_filter.noise_filter_group(octave_image, table, self.noise_model,
                                                                 self.filter_stddev, self.taps)
-        eevee_taps = node_groups.tap_count(self.noise_model, "BLENDER_EEVEE")
+        eevee_taps = noise_maths.tap_count(self.noise_model, "BLENDER_EEVEE")
         if eevee_taps < self.taps:
             # Too costly for EEVEE at this many taps: keep a smaller group
             # for it, which the render_init handler swaps in.
-            noise_filter[sample_count.GROUP_FOR_CYCLES] = noise_filter.node_tree
-            noise_filter[sample_count.GROUP_FOR_EEVEE] = node_groups.noise_filter_group(
+            filter_node[sample_count.GROUP_FOR_CYCLES] = filter_node.node_tree
+            filter_node[sample_count.GROUP_FOR_EEVEE] = noise_filter.noise_filter_group(
                 octave_image, table, self.noise_model, self.filter_stddev, eevee_taps)
-        sample_count.drive_samples(noise_filter, self.scene)
-        noise_filter.name = noise_filter.label = "Penumbra Noise Filter"
-        noise_filter.location = (group_node.location.x - 220, group_node.location.y + 40)
-        footprint = tree.nodes.new("ShaderNodeGroup")
-        footprint.node_tree = node_groups.footprint_group()
-        footprint.name = footprint.label = node_groups.FOOTPRINT
-        footprint.location = (group_node.location.x - 440, group_node.location.y - 120)
-        footprint.inputs["Pixel Size"].default_value = self.pixel_size or 0.0
-        footprint.inputs["Orthographic"].default_value = 1.0 if self.orthographic else 0.0
-        footprint.inputs["Raster Offset X"].default_value = self.raster_offset[0]
-        footprint.inputs["Raster Offset Y"].default_value = self.raster_offset[1]
+        sample_count.drive_samples(filter_node, self.scene)
+        filter_node.name = filter_node.label = "Penumbra Noise Filter"
+        filter_node.location = (group_node.location.x - 220, group_node.location.y + 40)
+        footprint_node = tree.nodes.new("ShaderNodeGroup")
+        footprint_node.node_tree = footprint.footprint_group()
+        footprint_node.name = footprint_node.label = node_groups.FOOTPRINT
+        footprint_node.location = (group_node.location.x - 440, group_node.location.y - 120)
+        footprint_node.inputs["Pixel Size"].default_value = self.pixel_size or 0.0
+        footprint_node.inputs["Orthographic"].default_value = 1.0 if self.orthographic else 0.0
+        footprint_node.inputs["Raster Offset X"].default_value = self.raster_offset[0]
+        footprint_node.inputs["Raster Offset Y"].default_value = self.raster_offset[1]
         if self.noise_model.vector_from is not None:
-            tree.links.new(self.noise_model.vector_from, noise_filter.inputs["Vector"])
+            tree.links.new(self.noise_model.vector_from, filter_node.inputs["Vector"])
         else:  # an unlinked texture vector means Generated coordinates
             coords = tree.nodes.new("ShaderNodeTexCoord")
             coords.name = coords.label = "Penumbra Noise Coordinates"
-            coords.location = (footprint.location.x, footprint.location.y + 200)
-            tree.links.new(coords.outputs["Generated"], noise_filter.inputs["Vector"])
-        tree.links.new(footprint.outputs["Minor"], noise_filter.inputs["Minor"])
-        tree.links.new(footprint.outputs["Major"], noise_filter.inputs["Major"])
+            coords.location = (footprint_node.location.x, footprint_node.location.y + 200)
+            tree.links.new(coords.outputs["Generated"], filter_node.inputs["Vector"])
+        tree.links.new(footprint_node.outputs["Minor"], filter_node.inputs["Minor"])
+        tree.links.new(footprint_node.outputs["Major"], filter_node.inputs["Major"])
         for name in ("Axis U", "Axis V"):
-            tree.links.new(footprint.outputs[name], noise_filter.inputs[name])
+            tree.links.new(footprint_node.outputs[name], filter_node.inputs[name])
         model = self.noise_model
         for name, source, value in (("Scale", model.scale_from, model.scale), ("W", model.w_from, model.w)):
             if source is not None:
-                tree.links.new(source, noise_filter.inputs[name])
+                tree.links.new(source, filter_node.inputs[name])
             elif value is not None:
-                noise_filter.inputs[name].default_value = value
-        noise_filter.inputs["Units per World"].default_value = self.coordinate_scale
+                filter_node.inputs[name].default_value = value
+        filter_node.inputs["Units per World"].default_value = self.coordinate_scale
         for name in ("Mean", "Sigma", "Offsets", "Variances"):
-            tree.links.new(noise_filter.outputs[name], group_node.inputs[name])
+            tree.links.new(filter_node.outputs[name], group_node.inputs[name])
 
 
-class _Rollback:
-    """What apply() may change, recorded before it starts: the tree's nodes,
-    links and the ramp's state, the image and node-group data blocks, and the
-    output folder (new files are removed, overwritten lookups restored). The
-    lookups are moved aside and back by _penumbra.replace_file_durably, so
-    that after a power cut a backup, or a restored lookup, is really there."""
+class _LookupFiles:
+    """The output folder as apply() found it: new files are removed and
+    overwritten lookups restored after a failure. The lookups are moved
+    aside and back by _penumbra.replace_file_durably, so that after a power
+    cut a backup, or a restored lookup, is really there."""
 
     def __init__(self, plan):
-        self.tree = plan.material.node_tree if plan.node is not None else None
-        self.ramp = plan.node
-        self.nodes = {n.name for n in self.tree.nodes} if self.tree else set()
-        self.links = [(l.from_socket, l.to_socket) for l in self.tree.links] if self.tree else []
-        self.ramp_state = (plan.node.mute, plan.node.label, tuple(plan.node.location)) if plan.node else None
-        self.images = set(bpy.data.images[:])
-        self.groups = set(bpy.data.node_groups[:])
         self.folder = plan.folder
         self.created_folder = not os.path.isdir(self.folder)
         self.files = set() if self.created_folder else set(os.listdir(self.folder))
@@ -415,25 +394,16 @@ class _Rollback:
                 self.backups[path] = backup
 
     def restore(self):
-        if self.tree is not None:
-            for node in [n for n in self.tree.nodes if n.name not in self.nodes]:
-                sample_count.remove_driver(node)
-                self.tree.nodes.remove(node)
-            for from_socket, to_socket in self.links:
-                if not any(l.from_socket == from_socket for l in to_socket.links):
-                    self.tree.links.new(from_socket, to_socket)
-            self.ramp.mute, self.ramp.label, self.ramp.location = self.ramp_state
-        for group in [g for g in bpy.data.node_groups if g not in self.groups]:
-            bpy.data.node_groups.remove(group)
-        for image in [i for i in bpy.data.images if i not in self.images]:
-            bpy.data.images.remove(image)
+        """After the material's Rollback.restore: the images left are the
+        ones from before, and one that showed an overwritten lookup is
+        reloaded from the restored file."""
         if os.path.isdir(self.folder):
             for name in set(os.listdir(self.folder)) - self.files:
                 if not name.endswith(".penumbra-backup"):
                     os.remove(os.path.join(self.folder, name))
         for path, backup in self.backups.items():
             native.require().replace_file_durably(backup, path)
-            for image in self.images:  # an earlier lookup reloaded from the new file
+            for image in bpy.data.images:
                 if image.filepath and os.path.normpath(bpy.path.abspath(image.filepath)) == path:
                     image.reload()
         self.backups = {}
@@ -492,7 +462,7 @@ class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            material = _editable_material(context)
+            material = editable_material(context)
         except BakeError as error:
             self.report({"ERROR"}, describe(error))
             return {"CANCELLED"}
@@ -504,7 +474,6 @@ class PENUMBRA_OT_restore_color_ramp(bpy.types.Operator):
             self.report({"ERROR"}, f"The active node of '{material.name}' is {what}, not a Penumbra Filtered Ramp: "
                                    "click the filtered ramp whose ColorRamp should come back")
             return {"CANCELLED"}
-        from .surface_filter import filters_of   # it imports this module
         covering = filters_of(tree, group_node)
         if covering:
             # The filter reads the lookup through this group: restoring under

@@ -15,7 +15,7 @@ from bpy.app.handlers import persistent
 
 NOISE_FILTER_PREFIX = "Penumbra Noise Filter"
 # Custom properties of a Noise Filter node whose noise EEVEE gets fewer taps
-# for (node_groups.tap_count): the group each engine renders with.
+# for (noise_maths.tap_count): the group each engine renders with.
 GROUP_FOR_CYCLES = "penumbra_group_cycles"
 GROUP_FOR_EEVEE = "penumbra_group_eevee"
 EEVEE_ENGINES = ("BLENDER_EEVEE", "BLENDER_EEVEE_NEXT")

@@ -1,6 +1,6 @@
 """penumbra.add_surface_filter: put the height- or slope-correlated filter of
-a baked colour map (paper Sec. 5.1 / 5.2; node_groups.height_ramp_group /
-slope_ramp_group) in place of a "Penumbra Filtered Ramp", and
+a baked colour map (paper Sec. 5.1 / 5.2; height_ramp.height_ramp_group /
+slope_ramp.slope_ramp_group) in place of a "Penumbra Filtered Ramp", and
 penumbra.remove_surface_filter to put the filtered ramp back.
 
 What the operator does, on the active material's node tree:
@@ -51,8 +51,8 @@ import os
 
 import bpy
 
-from . import node_groups
-from .operators import BakeError, _editable_material
+from . import height_ramp, microsurface, node_groups, slope_ramp
+from .material import BakeError, Rollback, active_material, editable_material
 from .. import node_links, world
 from ..errors import CORE_ERRORS, describe
 
@@ -88,8 +88,7 @@ def filters_of(tree, ramp):
 
 
 def _material_tree(context):
-    obj = context.object
-    material = getattr(context, "material", None) or (obj.active_material if obj else None)
+    material = active_material(context)
     return material.node_tree if material is not None and material.node_tree is not None else None
 
 
@@ -171,31 +170,6 @@ def _lookup_folder(image):
     return None
 
 
-class _Rollback:
-    """The tree's nodes and links, the filtered ramp's state and the data
-    blocks before the change; restore() puts them back after a failure."""
-
-    def __init__(self, tree, ramp):
-        self.tree, self.ramp = tree, ramp
-        self.nodes = {n.name for n in tree.nodes}
-        self.links = [(l.from_socket, l.to_socket) for l in tree.links]
-        self.ramp_state = (ramp.mute, ramp.label, tuple(ramp.location))
-        self.groups = set(bpy.data.node_groups[:])
-        self.images = set(bpy.data.images[:])
-
-    def restore(self):
-        for node in [n for n in self.tree.nodes if n.name not in self.nodes]:
-            self.tree.nodes.remove(node)
-        for from_socket, to_socket in self.links:
-            if not any(l.from_socket == from_socket for l in to_socket.links):
-                self.tree.links.new(from_socket, to_socket)
-        self.ramp.mute, self.ramp.label, self.ramp.location = self.ramp_state
-        for group in [g for g in bpy.data.node_groups if g not in self.groups]:
-            bpy.data.node_groups.remove(group)
-        for image in [i for i in bpy.data.images if i not in self.images]:
-            bpy.data.images.remove(image)
-
-
 def _move_output_links(tree, source, target, names=("Color", "Alpha")):
     """Every link that leaves source's outputs `names` leaves target's instead."""
     for name in names:
@@ -255,8 +229,8 @@ def _add_filter(op, context, tree, ramp, replaced):
     image, spec = lookup_of(ramp)
     # The groups read the microsurface table by name; written beside the
     # lookup (not in the session's temporary folder) it survives a reload.
-    node_groups.microsurface_image(_lookup_folder(image))
-    build = node_groups.height_ramp_group if kind == "HEIGHT" else node_groups.slope_ramp_group
+    microsurface.microsurface_image(_lookup_folder(image))
+    build = height_ramp.height_ramp_group if kind == "HEIGHT" else slope_ramp.slope_ramp_group
     group = build(image, spec)
     node = tree.nodes.new("ShaderNodeGroup")
     node.node_tree = group
@@ -331,7 +305,7 @@ replaces the Penumbra Filtered Ramp's output by the height or slope group on the
 
     def execute(self, context):
         try:
-            material = _editable_material(context)
+            material = editable_material(context)
             tree = material.node_tree
             ramp = find_filtered_ramp(material)
             existing = filters_of(tree, ramp)
@@ -347,7 +321,7 @@ replaces the Penumbra Filtered Ramp's output by the height or slope group on the
             replaced_name = replaced.name if replaced is not None else ""
             dropped = sum(len(s.links) for s in replaced.outputs if s.name not in ("Color", "Alpha")) \
                 if replaced is not None else 0
-            rollback = _Rollback(tree, ramp)
+            rollback = Rollback(tree, ramp)
             try:
                 node, used = _add_filter(self, context, tree, ramp, replaced)
             except BaseException:
@@ -374,7 +348,7 @@ class PENUMBRA_OT_remove_surface_filter(bpy.types.Operator):
 
     def execute(self, context):
         try:
-            material = _editable_material(context)
+            material = editable_material(context)
             tree = material.node_tree
             node = self._filter_node(material)
             ramp = tree.nodes.get(node.get(RAMP_KEY, ""))

@@ -10,7 +10,7 @@ import pytest
 
 from penumbra import compat, native
 
-from penumbra.colormap import interface, node_groups
+from penumbra.colormap import filtered_ramp, height_ramp, interface, node_groups, noise_maths, slope_ramp
 
 from colormap_scenes import make_ramp_material, plane_with
 
@@ -72,7 +72,7 @@ def test_bake_replaces_a_noise_driven_ramp_and_keeps_the_original(addon, tmp_pat
     assert noise_filter.node_tree.name.startswith("Penumbra Noise Filter")
     for name in ("Mean", "Offsets", "Variances"):
         assert group_node.inputs[name].links[0].from_socket == noise_filter.outputs[name]
-    assert noise_filter.node_tree["penumbra_taps"] == node_groups.TAP_COUNT   # Cycles: every tap
+    assert noise_filter.node_tree["penumbra_taps"] == noise_maths.TAP_COUNT   # Cycles: every tap
     # The noise's (unlinked, so Generated) coordinates and its Scale feed the octave filter.
     coords = noise_filter.inputs["Vector"].links[0].from_node
     assert coords.bl_idname == "ShaderNodeTexCoord" and noise_filter.inputs["Vector"].links[0].from_socket.name == "Generated"
@@ -155,7 +155,7 @@ def test_failure_after_the_lookup_is_written_changes_nothing(addon, tmp_path, mo
     def fail(*args, **kwargs):
         raise RuntimeError("simulated failure while building the node group")
 
-    monkeypatch.setattr(node_groups, "filtered_ramp_group", fail)
+    monkeypatch.setattr(filtered_ramp, "filtered_ramp_group", fail)
     native.require().testing.record_durable_steps()
     try:
         with pytest.raises(RuntimeError, match="simulated failure"):
@@ -265,8 +265,8 @@ def test_bake_from_an_image_makes_a_lookup_and_group(addon, tmp_path):
 def test_microsurface_groups_build_in_this_blenders_api(addon, tmp_path):
     image = bpy.data.images.new("lut", 8, 8, float_buffer=True)
     spec = {"width": 8, "height": 8, "sigma_max": 0.3, "mean_min": 0.0, "mean_max": 1.0, "sigma_spacing": "linear"}
-    height = node_groups.height_ramp_group(image, spec)
-    slope = node_groups.slope_ramp_group(image, spec)
+    height = height_ramp.height_ramp_group(image, spec)
+    slope = slope_ramp.slope_ramp_group(image, spec)
     assert interface.socket_names(height, "OUTPUT") == ["Color", "Alpha", "Visibility"]
     assert "Slope Sigma" in interface.socket_names(slope, "INPUT")
     table = bpy.data.images[node_groups.MICROSURFACE_IMAGE]

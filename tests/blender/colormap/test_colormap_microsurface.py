@@ -9,7 +9,7 @@ import numpy as np
 
 from penumbra import compat, native
 
-from penumbra.colormap import node_groups
+from penumbra.colormap import height_ramp, microsurface, slope_ramp, table_image
 
 # One tiny plane per pixel under an orthographic camera looking down −Z: each
 # plane has its own tilt (so its own view angle: Incoming is +Z everywhere)
@@ -91,7 +91,7 @@ def _lookup(tmp_path, mean_min, mean_max, sigma_max, width=256, height=64):
     table = core.colormap.lut_knots(_KNOTS, _MAP, "linear", width, height, sigma_max, mean_min, mean_max)
     spec = {"width": width, "height": height, "sigma_max": sigma_max, "mean_min": mean_min, "mean_max": mean_max,
             "sigma_spacing": "linear"}
-    image = node_groups.table_image("probe lookup", table, str(tmp_path))
+    image = table_image.table_image("probe lookup", table, str(tmp_path))
 
     def bilinear_error(means, sigmas):
         x = np.clip((means - mean_min) / (mean_max - mean_min) * (width - 1), 0, width - 1)
@@ -108,8 +108,8 @@ def _lookup(tmp_path, mean_min, mean_max, sigma_max, width=256, height=64):
 def _table_interp(values_at, x):
     """Linear interpolation of a 256-entry table over u = x/(1+x) (the
     microsurface image's layout: node i at u = i/255, the last at 1 − 1/1024)."""
-    u = np.arange(node_groups.MICROSURFACE_TABLE_SIZE) / (node_groups.MICROSURFACE_TABLE_SIZE - 1)
-    u[-1] = 1.0 - 1.0 / (4 * node_groups.MICROSURFACE_TABLE_SIZE)
+    u = np.arange(microsurface.MICROSURFACE_TABLE_SIZE) / (microsurface.MICROSURFACE_TABLE_SIZE - 1)
+    u[-1] = 1.0 - 1.0 / (4 * microsurface.MICROSURFACE_TABLE_SIZE)
     nodes = np.array([values_at(v / (1.0 - v)) for v in u])
     x = np.asarray(x, float)
     return np.array([np.interp(xi / (1.0 + xi) if np.isfinite(xi) else 1.0, u, nodes[:, c])
@@ -162,7 +162,7 @@ def test_height_filtered_ramp_renders_the_effective_height_distribution(addon, t
     tree, emission = _pixel_planes(addon, normals, props)
     image, spec, bilinear_error = _lookup(tmp_path, -0.25, 1.75, 0.4)
     group = tree.nodes.new("ShaderNodeGroup")
-    group.node_tree = node_groups.height_ramp_group(image, spec)
+    group.node_tree = height_ramp.height_ramp_group(image, spec)
     inputs = _separate(tree, _object_vector(tree, "inputs"))
     for index, name in enumerate(("Height Mean", "Height Sigma", "Slope Sigma")):
         tree.links.new(inputs[index], group.inputs[name])
@@ -241,7 +241,7 @@ def test_slope_filtered_ramp_renders_the_visible_slope_distribution(addon, tmp_p
     tree, emission = _pixel_planes(addon, normals, props)
     image, spec, bilinear_error = _lookup(tmp_path, -0.5, 1.5, 0.4)
     group = tree.nodes.new("ShaderNodeGroup")
-    group.node_tree = node_groups.slope_ramp_group(image, spec)
+    group.node_tree = slope_ramp.slope_ramp_group(image, spec)
     inputs = _separate(tree, _object_vector(tree, "inputs"))
     for index, name in enumerate(("Value at Zero Slope", "Value per Slope", "Slope Sigma")):
         tree.links.new(inputs[index], group.inputs[name])

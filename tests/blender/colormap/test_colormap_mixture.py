@@ -6,7 +6,7 @@ import bpy
 import numpy as np
 
 from penumbra import native
-from penumbra.colormap import node_groups
+from penumbra.colormap import filtered_ramp, node_groups
 
 from test_colormap_noise import _baked_plane_and_error, _render, _render_scene
 
@@ -40,7 +40,7 @@ def test_mixture_group_averages_the_four_components(addon, tmp_path):
     image = bpy.data.images[spec["image"]]
     table = native.require().image.read(bpy.path.abspath(image.filepath))[::-1, :, :3].astype(np.float64)
     node = tree.nodes.new("ShaderNodeGroup")
-    node.node_tree = node_groups.filtered_ramp_group(image, spec, "mixture under test", mixture=True)
+    node.node_tree = filtered_ramp.filtered_ramp_group(image, spec, "mixture under test", mixture=True)
     tree.links.new(node.outputs["Color"], emission.inputs["Color"])
     cases = [(0.0004, (0.5, 0.5, 0.5, 0.5), (0.0, 0.0, 0.0, 0.0)),          # one Gaussian
              (0.0001, (0.56, 0.45, 0.53, 0.48), (0.0004, 0.0001, 0.0009, 0.0)),

@@ -23,14 +23,14 @@ from bench.helpers.noise_points import noise_evaluator  # noqa: E402
 def test_octave_weights_rebuild_blenders_noise(addon, detail, roughness):
     """The octave filter rebuilds the noise as Σ w_i · Noise(Detail 0,
     Scale·2^i): checked against Blender's own multi-octave Noise Texture."""
-    from penumbra.colormap import noise_statistics
+    from penumbra.colormap import noise_maths
     noise, evaluate = noise_evaluator()
     points = np.random.default_rng(3).uniform(-40, 40, (500, 3))
     noise.inputs["Scale"].default_value = 1.7
     noise.inputs["Detail"].default_value = detail
     noise.inputs["Roughness"].default_value = roughness
     full = evaluate(points)
-    weights = noise_statistics.octave_weights(detail, roughness)
+    weights = noise_maths.octave_weights(detail, roughness, bpy.app.version)
     assert len(weights) == int(np.floor(detail)) + 1 + (1 if detail % 1 else 0)
     noise.inputs["Detail"].default_value = 0.0
     rebuilt = np.zeros_like(full)

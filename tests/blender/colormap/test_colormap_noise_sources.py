@@ -10,7 +10,7 @@ import bpy
 import numpy as np
 import pytest
 
-from penumbra.colormap import interface, node_groups, noise_model
+from penumbra.colormap import interface, node_builder, noise_maths, noise_model, noise_nodes
 
 LEGACY = bpy.app.version < (4, 1, 0)  # Musgrave Texture; no Noise types, Lacunarity or Normalize
 
@@ -73,7 +73,7 @@ class _Points:
         group = bpy.data.node_groups.new("noise at points", "GeometryNodeTree")
         interface.add_socket(group, "Geometry", "INPUT", "NodeSocketGeometry")
         interface.add_socket(group, "Geometry", "OUTPUT", "NodeSocketGeometry")
-        self.group, self.b = group, node_groups._Builder(group)
+        self.group, self.b = group, node_builder.Builder(group)
         self.geometry = group.nodes.new("NodeGroupInput").outputs[0]
         self.output = group.nodes.new("NodeGroupOutput").inputs[0]
         self.node = group.nodes.new(node_type)
@@ -127,13 +127,13 @@ def rebuild(b, model):
     """offset + Σ c_i (Fac_i − 0.5), each octave a Detail-0 Noise Texture at
     the model's distorted coordinates with Scale·lacunarity^i."""
     scale = model.scale if model.scale is not None else model.scale_from
-    coordinates = noise_model.distorted_vector(b, model.vector_from, scale, model,
+    coordinates = noise_nodes.distorted_vector(b, model.vector_from, scale, model,
                                                w=model.w_from if model.w is None else None)
     value = model.offset
     for i, c in enumerate(model.coefficients):
         octave_scale = scale * model.lacunarity ** i if model.scale is not None else \
             b.math("MULTIPLY", scale, model.lacunarity ** i)
-        fac = noise_model.octave_fac(b, coordinates, octave_scale, model)
+        fac = noise_nodes.octave_fac(b, coordinates, octave_scale, model)
         value = b.math("MULTIPLY_ADD", b.math("SUBTRACT", fac, 0.5), c, value)
     return value
 
@@ -163,11 +163,10 @@ def test_the_model_rebuilds_blenders_noise_from_detail_0_octaves(addon, case):
 
 
 def test_normalized_fbm_is_today_octave_weights_and_spans_0_to_1(addon):
-    from penumbra.colormap import noise_statistics
     points = _Points("ShaderNodeTexNoise", "3D", {}, {"Detail": 2.6, "Roughness": 0.8}, ())
     model = noise_model.read_noise(points.node)
     assert model.offset == 0.5
-    assert model.coefficients == pytest.approx(noise_statistics.octave_weights(2.6, 0.8))
+    assert model.coefficients == pytest.approx(noise_maths.octave_weights(2.6, 0.8, bpy.app.version))
     assert (model.mean_min, model.mean_max) == pytest.approx((0.0, 1.0))
     assert model.total_weight_sq == pytest.approx(sum(w * w for w in model.coefficients))
     assert model.vector_from is not None and model.scale == pytest.approx(1.7)
@@ -176,10 +175,10 @@ def test_normalized_fbm_is_today_octave_weights_and_spans_0_to_1(addon):
 def test_distortion_offsets_are_blenders_hash():
     """Spot values of Blender's offsets (noisetex.h): 1D uses hash_uint, 2D-4D
     hash_uint2; all components lie in [100, 200] and differ per seed."""
-    offsets = [noise_model.random_offset(float(seed), axes) for axes in (1, 2, 3, 4) for seed in range(4)]
+    offsets = [noise_maths.random_offset(float(seed), axes) for axes in (1, 2, 3, 4) for seed in range(4)]
     values = [v for o in offsets for v in o]
     assert all(100.0 <= v <= 200.0 for v in values)
-    assert noise_model.random_offset(0.0, 3) == noise_model.random_offset(0.0, 4)[:3]
+    assert noise_maths.random_offset(0.0, 3) == noise_maths.random_offset(0.0, 4)[:3]
     assert len(set(values)) == 20  # 4 of 1D, then component k of seed s is shared by 2D-4D
 
 

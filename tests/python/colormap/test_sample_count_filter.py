@@ -37,7 +37,7 @@ FREQUENCY = 2 * np.pi * np.array([1 / 8, 1 / 4, 1 / 2, 1.0, 2.0, 5.0])
 _ANGLES = np.array([0.3, 1.9, 0.9, 2.6, 1.4, 0.1])
 OMEGA = FREQUENCY[:, None] * np.stack([np.cos(_ANGLES), np.sin(_ANGLES)], axis=1)   # (octaves, 2)
 AMPLITUDE = 0.25 * 0.6 ** np.arange(len(FREQUENCY))
-SHARE_EXPONENT = 0.5                          # node_groups.KERNEL_SHARE_EXPONENT
+SHARE_EXPONENT = 0.5                          # noise_filter.KERNEL_SHARE_EXPONENT
 
 
 def blackman_harris(u):
