@@ -13,8 +13,11 @@ Our wheel is packed with `wheel pack` and made self-contained with
 `auditwheel repair`, which copies every library outside the manylinux
 allow-list into penumbra_core.libs/ under a unique name and points the
 module at it. The extension zip is built by Blender's own `blender_ext.py
-build`, so the manifest is validated the way Blender validates it.
-docs/packaging.md says why it is done this way.
+build`, so the manifest is validated the way Blender validates it. The
+manifest, bl_info, CMake and the built module's `_penumbra.__version__`
+must name one version before anything is packed, and each wheel's file name
+and METADATA the same one after. docs/packaging.md says why it is done this
+way.
 """
 
 import argparse
@@ -41,17 +44,46 @@ def run(*command, **kwargs):
     subprocess.run(command, check=True, env=env, **kwargs)
 
 
-def version_of_addon():
+def version_of_addon(addon_build):
+    """The one version of the manifest, bl_info, CMake and the built module;
+    exits naming each when they differ."""
     with open(os.path.join(ROOT, "addon", "penumbra", "blender_manifest.toml"), "rb") as f:
         manifest_version = tomllib.load(f)["version"]
     with open(os.path.join(ROOT, "addon", "penumbra", "__init__.py")) as f:
         bl_info = re.search(r'"version":\s*\((\d+),\s*(\d+),\s*(\d+)\)', f.read())
     with open(os.path.join(ROOT, "CMakeLists.txt")) as f:
         cmake = re.search(r"project\(penumbra VERSION ([0-9.]+)", f.read()).group(1)
-    versions = {manifest_version, ".".join(bl_info.groups()), cmake}
-    if len(versions) != 1:
-        sys.exit(f"package: the version differs between blender_manifest.toml, bl_info and CMakeLists.txt: {versions}")
-    return manifest_version
+    return agreed_version({"blender_manifest.toml": manifest_version, "bl_info": ".".join(bl_info.groups()),
+                           "CMakeLists.txt": cmake, "_penumbra.__version__": built_module_version(addon_build)})
+
+
+def agreed_version(versions):
+    """`versions`: {where: version}; their one value, or exit naming each."""
+    if len(set(versions.values())) != 1:
+        sys.exit("package: the version differs between " +
+                 ", ".join(f"{where} ({version})" for where, version in versions.items()))
+    return next(iter(versions.values()))
+
+
+def built_module_version(addon_build):
+    """_penumbra.__version__ of the module built for this Python, imported in
+    a child process (the other Pythons' modules come from the same build)."""
+    code = "import sys; sys.path.insert(0, sys.argv[1]); import _penumbra; print(_penumbra.__version__)"
+    result = subprocess.run([sys.executable, "-c", code, addon_build], capture_output=True, text=True)
+    if result.returncode != 0:
+        sys.exit(f"package: the built _penumbra in {addon_build} does not import; run `make build`:\n{result.stderr}")
+    return result.stdout.strip()
+
+
+def wheel_versions(wheel):
+    """The version in the wheel's file name and in its METADATA, as pip and
+    Blender read them."""
+    with zipfile.ZipFile(wheel) as z:
+        metadata = [n for n in z.namelist() if n.endswith(".dist-info/METADATA")]
+        text = z.read(metadata[0]).decode() if len(metadata) == 1 else ""
+    in_metadata = re.search(r"^Version: (\S+)$", text, re.MULTILINE)
+    return {f"{os.path.basename(wheel)} (file name)": os.path.basename(wheel).split("-")[1],
+            f"{os.path.basename(wheel)} (METADATA)": in_metadata.group(1) if in_metadata else "none"}
 
 
 def copy_addon_sources(dest):
@@ -97,6 +129,7 @@ def repaired_wheel(addon_build, tags, version, work):
         "-w", repaired, *glob.glob(os.path.join(packed, "*.whl")))
     wheels = glob.glob(os.path.join(repaired, "*.whl"))
     assert len(wheels) == 1, wheels
+    agreed_version({"the add-on": version, **wheel_versions(wheels[0])})
     return wheels[0]
 
 
@@ -171,8 +204,8 @@ def main():
     parser.add_argument("--build", default=os.path.join(ROOT, "build"))
     parser.add_argument("--dist", default=os.path.join(ROOT, "dist"))
     args = parser.parse_args()
-    version = version_of_addon()
     addon_build = os.path.join(args.build, "addon", "penumbra")
+    version = version_of_addon(addon_build)
     os.makedirs(args.dist, exist_ok=True)
     for old in glob.glob(os.path.join(args.dist, "penumbra-*.zip")):
         os.remove(old)
