@@ -7,8 +7,8 @@ failing on fabricated ones:
    versions go newest first, each once.
 2. The newest section is `[Unreleased]` or the section of the manifest's
    version (addon/penumbra/blender_manifest.toml), and it has content (at
-   least one bullet under a `###` heading). So an `[Unreleased]` heading with nothing under it
-   fails: leave it out until the first change lands.
+   least one bullet under a `###` heading). So an `[Unreleased]` heading
+   with nothing under it fails: leave it out until the first change lands.
 3. The manifest's version has its own section with content: once released,
    and as soon as the manifest is raised to the next version (the entry then
    moves from `[Unreleased]` to it). No section is newer than it.
@@ -20,7 +20,13 @@ failing on fabricated ones:
    definition) and each setting's default (`_penumbra.settings_spec()`) is
    compared with the newest recorded release. One that differs, is new or is
    gone needs a bullet in the newest section's `### Upgrading` naming it as
-   docs/release-formats.json keys it (backticks and case ignored).
+   docs/release-formats.json keys it (a whole word; backticks and case
+   ignored). A line elsewhere, or in an older section, does not count.
+
+Releasing X.Y.Z, then: raise the manifest, bl_info and CMake to X.Y.Z
+(scripts/package.py refuses a mismatch), turn `## [Unreleased]` into
+`## [X.Y.Z] - YYYY-MM-DD`, and record X.Y.Z's values in
+docs/release-formats.json (from then on, changes are compared with X.Y.Z).
 """
 
 import json
@@ -167,7 +173,12 @@ def upgrading_problems(found, recorded, formats, defaults):
     said = [b.replace("`", "").lower() for b in bullets]
     return [f"{name} was {then} in {max(recorded, key=version_key)} and is {now} now: the newest section's "
             f"'### Upgrading' needs a line naming {name}"
-            for name, then, now in changed if not any(name.lower() in b for b in said)]
+            for name, then, now in changed if not any(_names(b, name) for b in said)]
+
+
+def _names(bullet, name):
+    """Whether `bullet` names `name` as a whole word (lights.count is not lights.count_max)."""
+    return re.search(rf"(?<![\w.]){re.escape(name.lower())}(?![\w.])", bullet) is not None
 
 
 def _normalised(value):
@@ -250,6 +261,8 @@ def test_a_changed_new_or_removed_default_needs_an_upgrading_line_naming_it():
         assert len(failing) == 1 and failing[0].startswith(name), failing
         named = UNRELEASED_ENTRY + f"### Upgrading\n- `{name}` changed.\n\n" + RELEASED
         assert problems_of(named, defaults=defaults) == []
+        longer = UNRELEASED_ENTRY + f"### Upgrading\n- `{name}_max` changed.\n\n" + RELEASED
+        assert problems_of(longer, defaults=defaults) != [], "a longer name is another setting"
 
 
 def _tree(tmp_path, files):
