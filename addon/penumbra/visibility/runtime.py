@@ -66,7 +66,7 @@ class _Loaded:
         sizes, loops = scene_data.polygon_topology(mesh)
         # The polygons (Blender's vertex normals, computed in C++ each frame)
         # and the reference neighbours (the frames' tangents).
-        self.mesh = core.visibility.RuntimeMesh(len(mesh.vertices), sizes, loops)
+        self.mesh = core.visibility.ShadingMesh(len(mesh.vertices), sizes, loops)
         self.neighbours = core.visibility.reference_neighbours(len(mesh.vertices), sizes, loops)
         # The GPU preview's mesh reads (gpu_preview.object_inputs).
         self.buffers = scene_data.MeshBuffers(mesh)
@@ -149,7 +149,7 @@ def _read_positions(obj, depsgraph, entry):
     """The evaluated mesh's object-space positions into entry.positions, and
     the object's world matrix. Blender's normals are not read: reading them
     makes Blender compute them for the pose, which costs more than the C++
-    computing the same normals (runtime_shading.hpp)."""
+    computing the same normals (frame_shading.hpp)."""
     evaluated = obj.evaluated_get(depsgraph)
     mesh = evaluated.to_mesh()
     try:

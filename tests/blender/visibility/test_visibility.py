@@ -564,7 +564,7 @@ def test_run_time_normals_are_blenders_own(addon):
     its diagonals (measured: at most 8e-6 apart on this character)."""
     obj, rig = character(addon)
     sizes, loops = scene_data.polygon_topology(obj.data)
-    runtime_mesh = native.require().visibility.RuntimeMesh(len(obj.data.vertices), sizes, loops)
+    shading_mesh = native.require().visibility.ShadingMesh(len(obj.data.vertices), sizes, loops)
     for frame in (4, 11):
         addon.frame_set(frame)
         evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
@@ -574,7 +574,7 @@ def test_run_time_normals_are_blenders_own(addon):
             blender = scene_data._vertex_normals(mesh)
         finally:
             evaluated.to_mesh_clear()
-        ours = runtime_mesh.vertex_normals(positions)
+        ours = shading_mesh.vertex_normals(positions)
         if bpy.app.version >= (4, 5, 0):
             assert np.array_equal(ours, blender), np.abs(ours - blender).max()
         else:
