@@ -97,9 +97,9 @@ class BakeJob:
             if self.armature.animation_data.action != action:
                 self.armature.animation_data.action = action
             frame_id = self.actions.index(action) * 100000 + frame
-        from . import runtime
+        from . import frame_shading
         started = time.perf_counter()
-        with runtime.paused():  # the bake's own frame changes need no shading
+        with frame_shading.paused():  # the bake's own frame changes need no shading
             self.scene.frame_set(frame)
         depsgraph = bpy.context.evaluated_depsgraph_get()
         posed = time.perf_counter()
@@ -280,8 +280,8 @@ def store_result(obj, model, summary, path):
     settings.model_path = path
     settings.report = json.dumps(summary)
     settings.status = ""
-    from . import runtime
-    runtime.forget(obj)
+    from . import frame_shading
+    frame_shading.forget(obj)
 
 
 def fit_and_store(obj, pieces, lobes, path, threads=0, progress=None, job=None, seconds_bake=0.0):

@@ -9,7 +9,7 @@ untouched by it.
 Per pose, on the CPU (the core, GIL released): step 1, the ZH lobes of the
 pose (`visibility.PoseModel.synthesize`), and the frames of the deformed
 mesh (`visibility.vertex_frames`, the rule the bake used), from the same
-model, mesh, lighting and BRDF settings as runtime.shade_object. They go to
+model, mesh, lighting and BRDF settings as frame_shading.shade_object. They go to
 the GPU as vertex attributes; the lighting, T and the camera as a uniform
 block. The frame-change and depsgraph handlers compute them (object_inputs);
 the SpaceView3D draw callback uploads what changed and draws. Neither ever
@@ -35,7 +35,7 @@ import numpy as np
 from bpy.app.handlers import persistent
 
 from .. import native
-from . import preview_shader, runtime, scene_data
+from . import frame_shading, preview_shader, scene_data
 from .preview_shader import MAX_LOBES, MAX_ORDER, MODELS, check_configuration, lobe_vec4_count  # noqa: F401
 from .scene_data import VisibilityInputError
 
@@ -79,11 +79,11 @@ _mesh_buffers = {}  # object name -> scene_data.MeshBuffers (the preview's own: 
 
 def object_inputs(obj, scene, depsgraph=None):
     """PoseInputs of an enabled object at the scene's current state: the same
-    model, mesh, frames, lighting and BRDF as runtime.shade_object.
+    model, mesh, frames, lighting and BRDF as frame_shading.shade_object.
     Raises VisibilityInputError / ValueError / OSError like it."""
     t0 = time.perf_counter()
     core = native.require()
-    entry = runtime.loaded_model(obj)
+    entry = frame_shading.loaded_model(obj)
     model = entry.model
     settings = obj.penumbra_visibility
     brdf = settings.brdf.lower()
@@ -387,20 +387,20 @@ def _draw():
 def _armature_or_view_changed(scene, depsgraph):
     relevant = any(isinstance(u.id, bpy.types.World) or
                    (isinstance(u.id, bpy.types.Object) and u.id.type == "CAMERA") for u in depsgraph.updates)
-    return relevant or runtime._drives_enabled_object(scene, depsgraph.updates)
+    return relevant or frame_shading._drives_enabled_object(scene, depsgraph.updates)
 
 
-# runtime._busy: a bake is posing the scene frame by frame (runtime.paused),
+# frame_shading._busy: a bake is posing the scene frame by frame (frame_shading.paused),
 # or the CPU run time is writing its attributes.
 @persistent
 def on_frame_change(scene, depsgraph=None):
-    if scene.penumbra.visibility.gpu_preview and not runtime._busy:
+    if scene.penumbra.visibility.gpu_preview and not frame_shading._busy:
         update(scene, depsgraph)
 
 
 @persistent
 def on_depsgraph_update(scene, depsgraph):
-    if scene.penumbra.visibility.gpu_preview and not runtime._busy and _armature_or_view_changed(scene, depsgraph):
+    if scene.penumbra.visibility.gpu_preview and not frame_shading._busy and _armature_or_view_changed(scene, depsgraph):
         update(scene, depsgraph)
 
 

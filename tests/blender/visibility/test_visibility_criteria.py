@@ -32,7 +32,7 @@ def errors():
     """held_out_errors() of the model fitted on the other frames."""
     import penumbra
     from penumbra import native
-    from penumbra.visibility import runtime, scene_data
+    from penumbra.visibility import frame_shading, scene_data
     core = native.require()
     penumbra.register()
     try:
@@ -44,7 +44,7 @@ def errors():
         cycles, _ = cycles_ao(obj, HELD_OUT, humanoid.CYCLES_SAMPLES)
         return held_out_errors(core, model_sh(model, held_out), training, held_out, cycles)
     finally:
-        runtime.forget()
+        frame_shading.forget()
         penumbra.unregister()
 
 

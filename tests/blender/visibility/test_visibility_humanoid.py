@@ -14,7 +14,7 @@ import pytest
 
 import penumbra
 from penumbra import native
-from penumbra.visibility import runtime, scene_data
+from penumbra.visibility import frame_shading, scene_data
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
@@ -32,7 +32,7 @@ def humanoid():
         obj, rig = visibility_humanoid.build(detail=0.25, frames=FRAMES)
         yield bpy.context.scene, obj, rig
     finally:
-        runtime.forget()
+        frame_shading.forget()
         penumbra.unregister()
 
 
@@ -126,6 +126,6 @@ def test_the_visibility_baker_bakes_and_shades_the_humanoid(humanoid, tmp_path):
     scene.frame_set(7)
     assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
     ao = np.empty(len(obj.data.vertices), dtype=np.float32)
-    obj.data.attributes[runtime.VISIBILITY_ATTRIBUTE].data.foreach_get("value", ao)
+    obj.data.attributes[frame_shading.VISIBILITY_ATTRIBUTE].data.foreach_get("value", ao)
     assert np.all(np.isfinite(ao)) and 0.2 < ao.mean() < 0.95
     assert ao.min() < 0.5  # armpits, between the fingers, between the legs: shadowed

@@ -1,4 +1,4 @@
-"""Run time: on every frame change and pose edit, shade each enabled object
+"""Frame shading: on every frame change and pose edit, shade each enabled object
 from its visibility model (paper §4.3) under the World's SH lighting, and
 write the point-domain attributes `penumbra_shading` (colour, scene-linear
 RGB) and `penumbra_visibility` (float, cosine-weighted visibility = AO).
