@@ -24,7 +24,7 @@ from bench.helpers.paths import DOCS, ROOT, use_addon  # noqa: E402
 use_addon()
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
-from penumbra.visibility import bake, scene_data  # noqa: E402
+from penumbra.visibility import armature_data, bake, mesh_data  # noqa: E402
 import visibility_character  # noqa: E402
 from bench.helpers import visibility_frame_change  # noqa: E402
 from bench.helpers.cycles_ao import cycles_ao  # noqa: E402
@@ -154,11 +154,11 @@ def main():
     obj, rig = new_character(DETAIL)
     results["vertices"] = len(obj.data.vertices)
     log(f"character: {results['vertices']} vertices, {len(TRAIN)} training + {len(UNSEEN)} unseen frames")
-    influence = scene_data.bone_influence(obj, rig)
+    influence = armature_data.bone_influence(obj, rig)
 
     # Throughput on the rest pose: raw Embree vs the bake, same mesh, same run.
     bpy.context.scene.frame_set(1)
-    frame = scene_data.evaluated_mesh(obj, bpy.context.evaluated_depsgraph_get())
+    frame = mesh_data.evaluated_mesh(obj, bpy.context.evaluated_depsgraph_get())
     raw_single = raw_throughput(frame, 128, 0, "single")
     raw_packet = raw_throughput(frame, 128, 0, "packet")
     raw_one_thread = raw_throughput(frame, 128, 1, "single")
@@ -169,7 +169,7 @@ def main():
 
     # The C++ bake alone on the same rest-pose mesh, frame after frame with
     # nothing in between (no posing, no Python): its rays/s against raw Embree.
-    sizes, loops = scene_data.polygon_topology(obj.data)
+    sizes, loops = mesh_data.polygon_topology(obj.data)
     nb = core.visibility.reference_neighbours(len(obj.data.vertices), sizes, loops)
     static = {}
     for rays in (128, 512):

@@ -39,7 +39,7 @@ from bench.helpers.paths import DOCS, ROOT, use_addon  # noqa: E402
 use_addon()
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
-from penumbra.visibility import bake, scene_data  # noqa: E402
+from penumbra.visibility import armature_data, bake, mesh_data  # noqa: E402
 import visibility_humanoid  # noqa: E402
 from bench.helpers import doc_section, visibility_frame_change  # noqa: E402
 from bench.helpers.cycles_ao import cycles_ao  # noqa: E402
@@ -156,7 +156,7 @@ def casting(obj, results):
         np.asarray(job.neighbours, np.uint32).tofile(os.path.join(folder, "neighbours.u32"))
         for k, frame in enumerate(TRAIN[:CASTING_FRAMES]):
             bpy.context.scene.frame_set(frame)
-            mesh = scene_data.evaluated_mesh(obj, bpy.context.evaluated_depsgraph_get())
+            mesh = mesh_data.evaluated_mesh(obj, bpy.context.evaluated_depsgraph_get())
             for kind, array, dtype in (("p", mesh.positions, np.float32), ("n", mesh.normals, np.float32),
                                        ("t", mesh.triangles, np.uint32)):
                 np.ascontiguousarray(array, dtype).tofile(os.path.join(folder, f"{kind}{k:03d}.{'u32' if kind == 't' else 'f32'}"))
@@ -242,7 +242,7 @@ def main():
                    training_frames=len(TRAIN), held_out_frames=len(HELD_OUT), detail=DETAIL, frames=FRAMES)
     log(f"humanoid: {results['vertices']} vertices, {results['bones']} bones, built in {build_seconds:.1f} s; "
         f"{len(TRAIN)} training + {len(HELD_OUT)} held-out frames")
-    influence = scene_data.bone_influence(obj, rig)
+    influence = armature_data.bone_influence(obj, rig)
     training, held_out, cycles_held = accuracy(core, obj, influence, results)
     casting(obj, results)
     fit_cost(core, training, influence, results["accuracy"]["active_joints"], results)

@@ -14,7 +14,7 @@ import bpy
 import numpy as np
 
 from penumbra import native
-from penumbra.visibility import frame_shading, scene_data
+from penumbra.visibility import armature_data, frame_shading, mesh_data, world_lighting
 
 from bench.helpers.paths import BUILD
 
@@ -99,12 +99,12 @@ def runtime_accuracy(core, obj, scene):
     out["max_rgb"] = float(np.abs(rgb_ref).max())
     entry = frame_shading.loaded_model(obj)
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    frame = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False)   # Blender's normals
+    frame = mesh_data.evaluated_mesh(obj, depsgraph, with_topology=False)   # Blender's normals
     s = obj.penumbra_visibility
-    lighting, _, _ = scene_data.world_lighting_checked(scene, entry.model.order)
+    lighting, _, _ = world_lighting.world_lighting_checked(scene, entry.model.order)
     camera = np.array(scene.camera.matrix_world.translation) if scene.camera else np.zeros(3)
     rgb_blender, ao_blender, _ = entry.model.shade(
-        scene_data.bone_rotations(scene_data.armature_of(obj), entry.model.joints), frame.positions, frame.normals,
+        armature_data.bone_rotations(armature_data.armature_of(obj), entry.model.joints), frame.positions, frame.normals,
         frame.triangles, entry.neighbours, lighting, model=s.brdf.lower(), phong_exponent=s.phong_exponent,
         camera=camera, transmission=np.array(s.transmission[:]))
     out["normals_difference_rgb"] = float(np.abs(np.maximum(rgb_blender, 0.0) - rgb).max())

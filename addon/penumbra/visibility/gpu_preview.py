@@ -35,9 +35,9 @@ import numpy as np
 from bpy.app.handlers import persistent
 
 from .. import native
-from . import frame_shading, preview_shader, scene_data
+from . import armature_data, frame_shading, mesh_data, preview_shader, world_lighting
 from .preview_shader import MAX_LOBES, MAX_ORDER, MODELS, check_configuration, lobe_vec4_count  # noqa: F401
-from .scene_data import VisibilityInputError
+from .input_error import VisibilityInputError
 
 READBACK_WIDTH = 1024  # pixels per row when shading into an offscreen buffer, one vertex per pixel
 # Pulls the preview's triangles towards the eye by this fraction of clip w, so
@@ -74,7 +74,7 @@ def inputs_from_arrays(order, lighting, axes, bands, normals, tangents, position
     return PoseInputs(order, axes.shape[1], model, attributes, tri, uniforms)
 
 
-_mesh_buffers = {}  # object name -> scene_data.MeshBuffers (the preview's own: the CPU run time reuses its)
+_mesh_buffers = {}  # object name -> mesh_data.MeshBuffers (the preview's own: the CPU run time reuses its)
 
 
 def object_inputs(obj, scene, depsgraph=None):
@@ -88,13 +88,13 @@ def object_inputs(obj, scene, depsgraph=None):
     settings = obj.penumbra_visibility
     brdf = settings.brdf.lower()
     check_configuration(model.order, model.lobes, brdf)
-    armature = scene_data.armature_of(obj)
-    rotations = scene_data.bone_rotations(armature, model.joints)
+    armature = armature_data.armature_of(obj)
+    rotations = armature_data.bone_rotations(armature, model.joints)
     depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
     buffers = _mesh_buffers.get(obj.name)
     if buffers is None or buffers.vertex_count != model.vertex_count:
-        buffers = _mesh_buffers[obj.name] = scene_data.MeshBuffers(obj.data)
-    frame = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False, buffers=buffers)
+        buffers = _mesh_buffers[obj.name] = mesh_data.MeshBuffers(obj.data)
+    frame = mesh_data.evaluated_mesh(obj, depsgraph, with_topology=False, buffers=buffers)
     if len(frame.positions) != model.vertex_count:
         raise VisibilityInputError(f"'{obj.name}' has {len(frame.positions)} vertices after its modifiers; "
                                    f"the model has {model.vertex_count}")
@@ -105,7 +105,7 @@ def object_inputs(obj, scene, depsgraph=None):
     frames, _ = core.visibility.vertex_frames(frame.positions, frame.normals, entry.buffers.triangles,
                                               entry.neighbours)
     t3 = time.perf_counter()
-    lighting, _ = scene_data.world_lighting(scene, model.order)
+    lighting, _ = world_lighting.world_lighting(scene, model.order)
     camera = np.array(scene.camera.matrix_world.translation) if scene.camera else np.zeros(3)
     inputs = inputs_from_arrays(model.order, lighting, axes, bands, frames[:, 2], frames[:, 0],
                                 positions=frame.positions, model=brdf, phong_exponent=settings.phong_exponent,

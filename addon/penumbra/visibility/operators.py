@@ -15,7 +15,7 @@ from ..errors import CORE_ERRORS, describe
 from .bake import BakeJob, fit_model, resolve_path, store_result, summary_of
 from .material import SHADING_ATTRIBUTE, setup_material
 from .frame_shading import shade_object
-from .scene_data import VisibilityInputError
+from .input_error import VisibilityInputError
 
 
 class PENUMBRA_OT_bake_visibility(modal_job.JobOperator, bpy.types.Operator):
