@@ -60,7 +60,7 @@ def frame_change_costs(obj, frames, repeats=21, brdf="PHONG"):
     result["load_average"] = os.getloadavg()[0]  # the machine may be shared: say how busy it was
     settings.enabled = True
     result["simd_target"] = core.sh.simd_target()
-    result.update(runtime_accuracy(core, obj, scene))
+    result.update(frame_change_accuracy(core, obj, scene))
     settings.enabled = False
     return result
 
@@ -81,7 +81,7 @@ def summary(result):
             f"{r['normals_difference_rgb']:.2e}, max |Δao| {r['normals_difference_ao']:.2e}")
 
 
-def runtime_accuracy(core, obj, scene):
+def frame_change_accuracy(core, obj, scene):
     """On the current pose: the dispatched SIMD kernel against the one-lane
     scalar reference, and the fused run time (normals by Blender's rule,
     computed in C++) against the separate passes fed Blender's own normals."""
