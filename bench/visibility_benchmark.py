@@ -7,7 +7,7 @@ fit against Cycles' own AO bake of the same frames, and the run-time cost per
 frame at 10k and 100k vertices. Writes docs/visibility-benchmark.md,
 docs/visibility/benchmark.json and docs/visibility/errors.svg.
 
-    .venv/bin/python bench/visibility_benchmark.py [--quick | --runtime]
+    .venv/bin/python bench/visibility_benchmark.py [--quick | --frame-change]
 """
 
 import json
@@ -24,7 +24,7 @@ from bench.helpers.paths import DOCS, ROOT, use_addon  # noqa: E402
 use_addon()
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
-from penumbra.visibility import bake, scene_data  # noqa: E402
+from penumbra.visibility import armature_data, bake, mesh_data  # noqa: E402
 import visibility_character  # noqa: E402
 from bench.helpers import visibility_frame_change  # noqa: E402
 from bench.helpers.cycles_ao import cycles_ao  # noqa: E402
@@ -33,7 +33,7 @@ from bench.helpers.svg_plot import svg_plot  # noqa: E402
 from bench.helpers.visibility_training import baked_sh, bake_frames, model_sh  # noqa: E402
 
 QUICK = "--quick" in sys.argv
-RUNTIME_ONLY = "--runtime" in sys.argv  # only the run-time section (docs rewritten in place)
+FRAME_CHANGE_ONLY = "--frame-change" in sys.argv  # only the run-time section (docs rewritten in place)
 FRAMES = 48
 TRAIN = list(range(2, FRAMES + 1, 2))     # 24 training poses
 UNSEEN = list(range(1, FRAMES, 4))        # 12 poses never baked into the model
@@ -76,7 +76,7 @@ def sh_errors(predicted, truth):
     return np.sqrt(((predicted - truth) ** 2).sum(axis=-1) / (4 * np.pi))
 
 
-def runtime_costs(detail, repeats=15):
+def frame_change_costs(detail, repeats=15):
     """One frame change of the character with Penumbra (2 lobes, order 4,
     Phong) against Blender's own frame change without it, alternated frame by
     frame in the same run (bench/visibility_frame_change.py); the model is baked
@@ -86,26 +86,26 @@ def runtime_costs(detail, repeats=15):
     world = bpy.data.worlds.new("w")
     world.use_nodes = True
     bpy.context.scene.world = world
-    path = os.path.join(bpy.app.tempdir or "/tmp", f"bench_runtime_{detail}.pzh")
+    path = os.path.join(bpy.app.tempdir or "/tmp", f"bench_frame_change_{detail}.pzh")
     bpy.ops.penumbra.bake_visibility(frame_start=1, frame_end=8, frame_step=2, rays=16, lobes=2, filepath=path)
     result = visibility_frame_change.frame_change_costs(obj, list(range(1, 9)), repeats)
     log(visibility_frame_change.summary(result))
     return result
 
 
-def runtime_section(runtime_results):
+def frame_change_section(frame_change_results):
     """The "Run time per frame" section of docs/visibility-benchmark.md."""
     lines = ["## Run time per frame (handler, median)", "",
              visibility_frame_change.DESCRIPTION + " The realistic character's frame change at ~100k vertices is in "
              "[visibility-humanoid-benchmark.md](visibility-humanoid-benchmark.md). Run alone: `.venv/bin/python "
-             "bench/visibility_benchmark.py --runtime`.", ""]
-    lines += visibility_frame_change.table(runtime_results.values())
-    big = max(runtime_results.values(), key=lambda x: x["vertices"])
+             "bench/visibility_benchmark.py --frame-change`.", ""]
+    lines += visibility_frame_change.table(frame_change_results.values())
+    big = max(frame_change_results.values(), key=lambda x: x["vertices"])
     lines += ["", f"Goal (issue #13): the whole frame change at ~100k vertices at most 4.5× Blender's own. Measured: "
               f"**{big['ratio']:.2f}×** at {big['vertices']} vertices — "
               + ("met." if big["ratio"] <= 4.5 else "**not met**.")
               + " Load average during the runs (2 cores): "
-              + ", ".join(f"{x['load_average']:.1f}" for x in runtime_results.values()) + "; "
+              + ", ".join(f"{x['load_average']:.1f}" for x in frame_change_results.values()) + "; "
               f"{big['repeats']} frame changes each way per size."]
     kernel = big.get("kernel_ns_per_vertex")
     if kernel:
@@ -116,14 +116,14 @@ def runtime_section(runtime_results):
                       f"{name} {ns:.0f} ns/vertex" + (f" ({scalar / ns:.1f}× the scalar one)" if scalar else "")
                       for name, ns in kernel.items())
                   + ". SSE4 is what the default x86-64-v2 build ran before the run-time dispatch."]
-    lines += ["", visibility_frame_change.accuracy_line(runtime_results.values())]
+    lines += ["", visibility_frame_change.accuracy_line(frame_change_results.values())]
     return lines
 
 
-def run_runtime_only():
-    """--runtime: only the run-time section, rewritten in place in the docs."""
+def run_frame_change_only():
+    """--frame-change: only the run-time section, rewritten in place in the docs."""
     penumbra.register()
-    results = {"10k": runtime_costs(3.4, repeats=21), "100k": runtime_costs(11, repeats=21)}
+    results = {"10k": frame_change_costs(3.4, repeats=21), "100k": frame_change_costs(11, repeats=21)}
     penumbra.unregister()
     results["100k"]["kernel_ns_per_vertex"] = visibility_frame_change.kernel_per_target()
     path = os.path.join(DOCS, "visibility-benchmark.md")
@@ -135,12 +135,12 @@ def run_runtime_only():
     following = after.find("\n## ", 1)
     rest = after[following + 1:] if following >= 0 else ""
     with open(path + ".tmp", "w") as f:
-        f.write(before + "\n".join(runtime_section(results)) + "\n" + ("\n" + rest if rest else ""))
+        f.write(before + "\n".join(frame_change_section(results)) + "\n" + ("\n" + rest if rest else ""))
     os.replace(path + ".tmp", path)
     json_path = os.path.join(DOCS, "visibility", "benchmark.json")
     with open(json_path) as f:
         stored = json.load(f)
-    stored["runtime"] = results
+    stored["frame_change"] = results
     with open(json_path + ".tmp", "w") as f:
         json.dump(stored, f, indent=1)
     os.replace(json_path + ".tmp", json_path)
@@ -154,11 +154,11 @@ def main():
     obj, rig = new_character(DETAIL)
     results["vertices"] = len(obj.data.vertices)
     log(f"character: {results['vertices']} vertices, {len(TRAIN)} training + {len(UNSEEN)} unseen frames")
-    influence = scene_data.bone_influence(obj, rig)
+    influence = armature_data.bone_influence(obj, rig)
 
     # Throughput on the rest pose: raw Embree vs the bake, same mesh, same run.
     bpy.context.scene.frame_set(1)
-    frame = scene_data.evaluated_mesh(obj, bpy.context.evaluated_depsgraph_get())
+    frame = mesh_data.evaluated_mesh(obj, bpy.context.evaluated_depsgraph_get())
     raw_single = raw_throughput(frame, 128, 0, "single")
     raw_packet = raw_throughput(frame, 128, 0, "packet")
     raw_one_thread = raw_throughput(frame, 128, 1, "single")
@@ -169,7 +169,7 @@ def main():
 
     # The C++ bake alone on the same rest-pose mesh, frame after frame with
     # nothing in between (no posing, no Python): its rays/s against raw Embree.
-    sizes, loops = scene_data.polygon_topology(obj.data)
+    sizes, loops = mesh_data.polygon_topology(obj.data)
     nb = core.visibility.reference_neighbours(len(obj.data.vertices), sizes, loops)
     static = {}
     for rays in (128, 512):
@@ -322,10 +322,10 @@ def main():
     log("cycles:", results["cycles"])
 
     # Run-time cost per frame.
-    results["runtime"] = {"10k": runtime_costs(3.4)}
+    results["frame_change"] = {"10k": frame_change_costs(3.4)}
     if not QUICK:
-        results["runtime"]["100k"] = runtime_costs(11)
-    log("runtime:", results["runtime"])
+        results["frame_change"]["100k"] = frame_change_costs(11)
+    log("frame change:", results["frame_change"])
     penumbra.unregister()
 
     with open(os.path.join(DOCS, "visibility", "benchmark.json.tmp"), "w") as f:
@@ -441,7 +441,7 @@ def write_markdown(r):
               f"{c['estimated_seconds_all_training_frames']:.1f} s for the {len(TRAIN)} training frames. The whole "
               f"Penumbra bake + fit (128 rays, 2 lobes) of the same frames: {c['ours_bake_plus_fit_seconds']:.1f} s — "
               f"**{c['ratio_ours_over_cycles']:.3f}×** Cycles' time (goal ≤ 0.1)."]
-    lines += [""] + runtime_section(r["runtime"])
+    lines += [""] + frame_change_section(r["frame_change"])
     path = os.path.join(DOCS, "visibility-benchmark.md")
     with open(path + ".tmp", "w") as f:
         f.write("\n".join(lines) + "\n")
@@ -450,4 +450,4 @@ def write_markdown(r):
 
 
 if __name__ == "__main__":
-    run_runtime_only() if RUNTIME_ONLY else main()
+    run_frame_change_only() if FRAME_CHANGE_ONLY else main()

@@ -20,9 +20,9 @@ and fitted as the operator does, its frame change against Blender's own
 Writes docs/visibility-humanoid-benchmark.md,
 docs/visibility/humanoid-benchmark.json and docs/visibility/humanoid-fit-cost.svg.
 
-    .venv/bin/python bench/visibility_humanoid_benchmark.py [--quick | --runtime]
+    .venv/bin/python bench/visibility_humanoid_benchmark.py [--quick | --frame-change]
 
---runtime: only the ~100k-vertex run-time section, rewritten in place.
+--frame-change: only the ~100k-vertex run-time section, rewritten in place.
 """
 
 import json
@@ -39,7 +39,7 @@ from bench.helpers.paths import DOCS, ROOT, use_addon  # noqa: E402
 use_addon()
 import penumbra  # noqa: E402
 from penumbra import native  # noqa: E402
-from penumbra.visibility import bake, scene_data  # noqa: E402
+from penumbra.visibility import armature_data, bake, mesh_data  # noqa: E402
 import visibility_humanoid  # noqa: E402
 from bench.helpers import doc_section, visibility_frame_change  # noqa: E402
 from bench.helpers.cycles_ao import cycles_ao  # noqa: E402
@@ -49,10 +49,10 @@ from bench.helpers.visibility_criteria import GOAL, frame_ao, held_out_errors, o
 from bench.helpers.visibility_training import baked_sh, bake_frames, model_sh  # noqa: E402
 
 QUICK = "--quick" in sys.argv
-RUNTIME_ONLY = "--runtime" in sys.argv
+FRAME_CHANGE_ONLY = "--frame-change" in sys.argv
 # The run time at production scale: ~100k vertices (2.5k with --quick).
-RUNTIME_DETAIL = 0.25 if QUICK else 10.0
-RUNTIME_SECTION = "## Frame change at production scale"
+FRAME_CHANGE_DETAIL = 0.25 if QUICK else 10.0
+FRAME_CHANGE_SECTION = "## Frame change at production scale"
 # 9.9k vertices at detail 1 (the issue's mocap character had 9,264), 64
 # frames of the capture at 24 fps: every 4th held out (16), 48 train.
 DETAIL = 0.5 if QUICK else 1.0
@@ -156,7 +156,7 @@ def casting(obj, results):
         np.asarray(job.neighbours, np.uint32).tofile(os.path.join(folder, "neighbours.u32"))
         for k, frame in enumerate(TRAIN[:CASTING_FRAMES]):
             bpy.context.scene.frame_set(frame)
-            mesh = scene_data.evaluated_mesh(obj, bpy.context.evaluated_depsgraph_get())
+            mesh = mesh_data.evaluated_mesh(obj, bpy.context.evaluated_depsgraph_get())
             for kind, array, dtype in (("p", mesh.positions, np.float32), ("n", mesh.normals, np.float32),
                                        ("t", mesh.triangles, np.uint32)):
                 np.ascontiguousarray(array, dtype).tofile(os.path.join(folder, f"{kind}{k:03d}.{'u32' if kind == 't' else 'f32'}"))
@@ -242,12 +242,12 @@ def main():
                    training_frames=len(TRAIN), held_out_frames=len(HELD_OUT), detail=DETAIL, frames=FRAMES)
     log(f"humanoid: {results['vertices']} vertices, {results['bones']} bones, built in {build_seconds:.1f} s; "
         f"{len(TRAIN)} training + {len(HELD_OUT)} held-out frames")
-    influence = scene_data.bone_influence(obj, rig)
+    influence = armature_data.bone_influence(obj, rig)
     training, held_out, cycles_held = accuracy(core, obj, influence, results)
     casting(obj, results)
     fit_cost(core, training, influence, results["accuracy"]["active_joints"], results)
     size_against_error(core, training, held_out, cycles_held, influence, results)
-    runtime_at_scale(results)
+    frame_change_at_scale(results)
     penumbra.unregister()
 
     folder = os.path.join(DOCS, "visibility")
@@ -258,19 +258,19 @@ def main():
     write_markdown(results)
 
 
-def runtime_at_scale(results):
-    """The humanoid at RUNTIME_DETAIL baked over every frame by the operator
+def frame_change_at_scale(results):
+    """The humanoid at FRAME_CHANGE_DETAIL baked over every frame by the operator
     (RAYS rays, LOBES lobes, the defaults otherwise: what a user gets), then
     its frame change against Blender's own, alternated over the frames."""
-    obj, rig, build_seconds = new_humanoid(RUNTIME_DETAIL)
+    obj, rig, build_seconds = new_humanoid(FRAME_CHANGE_DETAIL)
     bpy.context.scene.world.use_nodes = True   # its grey background lights the shading
-    path = os.path.join(bpy.app.tempdir or "/tmp", "bench_humanoid_runtime.pzh")
+    path = os.path.join(bpy.app.tempdir or "/tmp", "bench_humanoid_frame_change.pzh")
     started = time.perf_counter()
     result = bpy.ops.penumbra.bake_visibility(frame_start=1, frame_end=FRAMES, frame_step=1, rays=RAYS, lobes=LOBES,
                                               filepath=path)
     bake_seconds = time.perf_counter() - started
     if result != {"FINISHED"}:
-        raise RuntimeError(f"the bake at {RUNTIME_DETAIL} did not finish: {result}")
+        raise RuntimeError(f"the bake at {FRAME_CHANGE_DETAIL} did not finish: {result}")
     costs = visibility_frame_change.frame_change_costs(obj, list(range(1, FRAMES + 1)))
     summary = dict(native.require().visibility.PoseModel.load(path).summary)
     costs.update(build_seconds=build_seconds, bake_fit_seconds=bake_seconds, model_bytes=os.path.getsize(path),
@@ -279,21 +279,21 @@ def runtime_at_scale(results):
                  constant_vertices=int(summary["constant_vertices"]))
     log(visibility_frame_change.summary(costs))
     log("at scale:", {k: costs[k] for k in ("build_seconds", "bake_fit_seconds", "model_bytes", "holdout_ao")})
-    results["runtime"] = costs
+    results["frame_change"] = costs
     return costs
 
 
-def runtime_lines(r):
-    x = r["runtime"]
+def frame_change_lines(r):
+    x = r["frame_change"]
     a = r.get("accuracy")
-    lines = [RUNTIME_SECTION, "",
-             f"The same humanoid at detail {RUNTIME_DETAIL:g}: {x['vertices']} vertices (its weights made at "
+    lines = [FRAME_CHANGE_SECTION, "",
+             f"The same humanoid at detail {FRAME_CHANGE_DETAIL:g}: {x['vertices']} vertices (its weights made at "
              "10k vertices and subdivided, as a base mesh's painted weights are), baked by "
              f"`bpy.ops.penumbra.bake_visibility` over all {x['training_frames']} frames at {RAYS} rays, {LOBES} lobes, "
              f"order {ORDER} and every other setting at its default ({x['active_joints']} active joints, "
              f"{x['constant_vertices']} constant vertices, model {x['model_bytes'] / 1e6:.1f} MB; bake + fit "
              f"{x['bake_fit_seconds']:.0f} s). " + visibility_frame_change.DESCRIPTION + " Run alone: `.venv/bin/python "
-             "bench/visibility_humanoid_benchmark.py --runtime`.", ""]
+             "bench/visibility_humanoid_benchmark.py --frame-change`.", ""]
     lines += visibility_frame_change.table([x], "held-out mean abs ΔAO", lambda x: f"{x['holdout_ao']:.4f}")
     lines += ["", f"Goal (issue #13): the whole frame change at ~100k vertices at most 4.5× Blender's own. Measured: "
               f"**{x['ratio']:.2f}×** at {x['vertices']} vertices — {verdict(x['ratio'] <= 4.5)}. "
@@ -308,17 +308,17 @@ def runtime_lines(r):
     return lines
 
 
-def run_runtime_only():
-    """--runtime: only the production-scale section, rewritten in place."""
+def run_frame_change_only():
+    """--frame-change: only the production-scale section, rewritten in place."""
     penumbra.register()
     results = {}
-    runtime_at_scale(results)
+    frame_change_at_scale(results)
     penumbra.unregister()
     path = os.path.join(DOCS, "visibility-humanoid-benchmark.md")
     json_path = os.path.join(DOCS, "visibility", "humanoid-benchmark.json")
     stored = json.load(open(json_path)) if os.path.exists(json_path) else {}
-    stored["runtime"] = results["runtime"]
-    doc_section.write_section(path, RUNTIME_SECTION, "\n".join(runtime_lines(stored)) + "\n")
+    stored["frame_change"] = results["frame_change"]
+    doc_section.write_section(path, FRAME_CHANGE_SECTION, "\n".join(frame_change_lines(stored)) + "\n")
     with open(json_path + ".tmp", "w") as f:
         json.dump(stored, f, indent=1)
     os.replace(json_path + ".tmp", json_path)
@@ -360,7 +360,7 @@ def write_markdown(r):
              f"Held-out error / per-frame bake's: **{a['ratio_model_over_per_frame']:.2f}** (goal ≤ {GOAL:g}: "
              f"{verdict(a['ratio_model_over_per_frame'] <= GOAL)}).", "",
              "## Bake + fit against Cycles' time", ""] + timing_lines(r) + casting_lines(r)
-    lines += fit_cost_lines(r) + size_lines(r) + [""] + runtime_lines(r)
+    lines += fit_cost_lines(r) + size_lines(r) + [""] + frame_change_lines(r)
     path = os.path.join(DOCS, "visibility-humanoid-benchmark.md")
     with open(path + ".tmp", "w") as f:
         f.write("\n".join(lines) + "\n")
@@ -454,4 +454,4 @@ def size_lines(r):
 
 
 if __name__ == "__main__":
-    run_runtime_only() if RUNTIME_ONLY else main()
+    run_frame_change_only() if FRAME_CHANGE_ONLY else main()

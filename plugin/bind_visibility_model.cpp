@@ -1,6 +1,6 @@
 // _penumbra.visibility.PoseModel and fit_model: the linear pose-space ZH
 // visibility model (core/visibility/pose_model.hpp), its file, and its run
-// time (pose -> lobes -> shading, core/visibility/runtime_shading.hpp).
+// time (pose -> lobes -> shading, core/visibility/frame_shading.hpp).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -20,7 +20,7 @@
 #include "visibility/model_statistics.hpp"
 #include "visibility/order_limit.hpp"
 #include "visibility/pose_model.hpp"
-#include "visibility/runtime_shading.hpp"
+#include "visibility/frame_shading.hpp"
 
 namespace py = pybind11;
 namespace vis = penumbra::visibility;
@@ -99,7 +99,7 @@ py::tuple shade(const vis::PoseModel& x, const Floats& joint_rotations, const Fl
     const auto t = indices(triangles, "triangles", true), nb = indices(neighbours, "neighbours", false);
     const Eigen::MatrixXd l = lighting_sh(lighting, x.order);
     const sh::ShadingParameters sp = shading_parameters(model, phong_exponent, camera, transmission, threads);
-    vis::RuntimeResult result;
+    vis::ShadingResult result;
     {
         py::gil_scoped_release release;
         const auto shader = shader_for(x.order);
@@ -143,7 +143,7 @@ const float* positions_of(const Floats& positions, std::size_t V) {
     return positions.data();
 }
 
-py::tuple shade_frame(const vis::PoseModel& x, const vis::RuntimeMesh& mesh, const Floats& joint_rotations,
+py::tuple shade_frame(const vis::PoseModel& x, const vis::ShadingMesh& mesh, const Floats& joint_rotations,
                       const Floats& positions, const Doubles& world, const Doubles& lighting, sh::ShadingModel model,
                       double phong_exponent, const std::array<double, 3>& camera,
                       const std::array<double, 3>& transmission, int threads, const py::object& rgba_out,
@@ -174,16 +174,17 @@ py::tuple shade_frame(const vis::PoseModel& x, const vis::RuntimeMesh& mesh, con
     return py::make_tuple(rgba, visibility, info);
 }
 
-void bind_runtime_mesh(py::module_& m) {
-    py::class_<vis::RuntimeMesh, std::shared_ptr<vis::RuntimeMesh>>(m, "RuntimeMesh",
-        "What the run time keeps of a mesh between frames: its polygons (for Blender's vertex normals) and the "
-        "reference neighbours of the bake's frames.")
+void bind_shading_mesh(py::module_& m) {
+    auto mesh = py::class_<vis::ShadingMesh, std::shared_ptr<vis::ShadingMesh>>(m, "ShadingMesh",
+        "What the frame shading keeps of a mesh between frames: its polygons (for Blender's vertex normals) and the "
+        "reference neighbours of the bake's frames. Also bound as RuntimeMesh, its earlier name (the same class).");
+    mesh
         .def(py::init([](std::size_t vertex_count, const Indices& polygon_sizes, const Indices& polygon_vertices) {
-            return std::make_shared<vis::RuntimeMesh>(vertex_count, indices(polygon_sizes, "polygon_sizes", false),
+            return std::make_shared<vis::ShadingMesh>(vertex_count, indices(polygon_sizes, "polygon_sizes", false),
                                                       indices(polygon_vertices, "polygon_vertices", false));
         }), py::arg("vertex_count"), py::arg("polygon_sizes"), py::arg("polygon_vertices"))
-        .def_property_readonly("vertex_count", [](const vis::RuntimeMesh& x) { return x.polygons.vertex_count(); })
-        .def("vertex_normals", [](const vis::RuntimeMesh& x, const Floats& positions, int threads) {
+        .def_property_readonly("vertex_count", [](const vis::ShadingMesh& x) { return x.polygons.vertex_count(); })
+        .def("vertex_normals", [](const vis::ShadingMesh& x, const Floats& positions, int threads) {
             const float* p = positions_of(positions, x.polygons.vertex_count());
             py::array_t<float> out({py::ssize_t(x.polygons.vertex_count()), py::ssize_t(3)});
             float* o = out.mutable_data();
@@ -195,6 +196,7 @@ void bind_runtime_mesh(py::module_& m) {
         }, py::arg("positions"), py::arg("threads") = 0,
            "Vertex normals (V, 3) float32 of the mesh at `positions` by Blender 4.x/5.x's rule "
            "(core/visibility/vertex_normals.hpp): bit-identical to Blender's own there.");
+    m.attr("RuntimeMesh") = mesh;  // the old name, kept for scripts written against it
 }
 
 void bind_properties(py::class_<vis::PoseModel, Model>& c) {
@@ -331,7 +333,7 @@ py::tuple fit_model(const vis::TrainingSet& set, const std::vector<std::pair<boo
 }  // namespace
 
 void bind_visibility_model(py::module_& m) {
-    bind_runtime_mesh(m);
+    bind_shading_mesh(m);
     bind_pose_model(m);
     const vis::FitSettings fit;  // every default below is the core's own
     m.def("fit_model", &fit_model, py::arg("training_set"), py::arg("bone_influence"), py::arg("lobes") = fit.lobes,

@@ -14,7 +14,7 @@ import bpy
 import numpy as np
 
 from penumbra import native
-from penumbra.visibility import runtime, scene_data
+from penumbra.visibility import armature_data, frame_shading, mesh_data, world_lighting
 
 from bench.helpers.paths import BUILD
 
@@ -29,7 +29,7 @@ def frame_change_costs(obj, frames, repeats=21, brdf="PHONG"):
     """Frame changes of `obj`'s scene with the run time on (alternating
     frames[k % len] with it, frames[(k + 1) % len] without) and Blender's own
     frame change without it; medians in seconds, the handler's breakdown
-    (runtime.last_timings), the ratio, and the accuracy on the last pose."""
+    (frame_shading.last_timings), the ratio, and the accuracy on the last pose."""
     core = native.require()
     settings = obj.penumbra_visibility
     settings.brdf = brdf
@@ -40,7 +40,7 @@ def frame_change_costs(obj, frames, repeats=21, brdf="PHONG"):
         started = time.perf_counter()
         scene.frame_set(frames[(2 * k) % len(frames)])
         total = time.perf_counter() - started
-        rows.append(dict(runtime.last_timings, frame_change=total))
+        rows.append(dict(frame_shading.last_timings, frame_change=total))
         settings.enabled = False
         started = time.perf_counter()
         scene.frame_set(frames[(2 * k + 1) % len(frames)])
@@ -60,7 +60,7 @@ def frame_change_costs(obj, frames, repeats=21, brdf="PHONG"):
     result["load_average"] = os.getloadavg()[0]  # the machine may be shared: say how busy it was
     settings.enabled = True
     result["simd_target"] = core.sh.simd_target()
-    result.update(runtime_accuracy(core, obj, scene))
+    result.update(frame_change_accuracy(core, obj, scene))
     settings.enabled = False
     return result
 
@@ -81,30 +81,30 @@ def summary(result):
             f"{r['normals_difference_rgb']:.2e}, max |Δao| {r['normals_difference_ao']:.2e}")
 
 
-def runtime_accuracy(core, obj, scene):
+def frame_change_accuracy(core, obj, scene):
     """On the current pose: the dispatched SIMD kernel against the one-lane
     scalar reference, and the fused run time (normals by Blender's rule,
     computed in C++) against the separate passes fed Blender's own normals."""
     out = {}
-    rgb, ao, _ = runtime.shade_object(obj, scene)
+    rgb, ao, _ = frame_shading.shade_object(obj, scene)
     rgb, ao = rgb.copy(), ao.copy()
     core.sh.force_simd_target(core.sh.simd_targets()[-1])
     try:
         out["reference_target"] = core.sh.simd_target()
-        rgb_ref, ao_ref, _ = runtime.shade_object(obj, scene)
+        rgb_ref, ao_ref, _ = frame_shading.shade_object(obj, scene)
     finally:
         core.sh.force_simd_target("")
     out["max_abs_difference_rgb"] = float(np.abs(rgb - rgb_ref).max())
     out["max_abs_difference_ao"] = float(np.abs(ao - ao_ref).max())
     out["max_rgb"] = float(np.abs(rgb_ref).max())
-    entry = runtime.loaded_model(obj)
+    entry = frame_shading.loaded_model(obj)
     depsgraph = bpy.context.evaluated_depsgraph_get()
-    frame = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False)   # Blender's normals
+    frame = mesh_data.evaluated_mesh(obj, depsgraph, with_topology=False)   # Blender's normals
     s = obj.penumbra_visibility
-    lighting, _, _ = scene_data.world_lighting_checked(scene, entry.model.order)
+    lighting, _, _ = world_lighting.world_lighting_checked(scene, entry.model.order)
     camera = np.array(scene.camera.matrix_world.translation) if scene.camera else np.zeros(3)
     rgb_blender, ao_blender, _ = entry.model.shade(
-        scene_data.bone_rotations(scene_data.armature_of(obj), entry.model.joints), frame.positions, frame.normals,
+        armature_data.bone_rotations(armature_data.armature_of(obj), entry.model.joints), frame.positions, frame.normals,
         frame.triangles, entry.neighbours, lighting, model=s.brdf.lower(), phong_exponent=s.phong_exponent,
         camera=camera, transmission=np.array(s.transmission[:]))
     out["normals_difference_rgb"] = float(np.abs(np.maximum(rgb_blender, 0.0) - rgb).max())

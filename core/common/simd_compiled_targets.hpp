@@ -1,5 +1,5 @@
 // Which SIMD targets the Highway kernels (sh/pose_shading_kernel.cpp,
-// visibility/runtime_kernel.cpp, lights/region_kernels.cpp) are compiled
+// visibility/vertex_kernels.cpp, lights/region_kernels.cpp) are compiled
 // for, and so which ones simd_target.cpp lists and can force: every target
 // at least as good as the build's baseline, plus EMU128, the one-lane scalar
 // reference the SIMD targets are tested against. SSSE3 is below the

@@ -1,5 +1,5 @@
 // Lane vectors for the kernels Highway compiles once per SIMD target
-// (sh/pose_shading_kernel.cpp, visibility/runtime_kernel.cpp,
+// (sh/pose_shading_kernel.cpp, visibility/vertex_kernels.cpp,
 // lights/region_kernels.cpp). A lane vector is one register of the target
 // being compiled, written as a GCC/Clang vector extension, which Highway's
 // per-target `#pragma GCC target` turns into that target's instructions:

@@ -1,5 +1,5 @@
 // Which SIMD target the Highway kernels run on (sh/pose_shading_kernel.cpp,
-// visibility/runtime_kernel.cpp, lights/region_kernels.cpp). Each is
+// visibility/vertex_kernels.cpp, lights/region_kernels.cpp). Each is
 // compiled for several targets (common/simd_compiled_targets.hpp) and runs
 // the best one the CPU supports, chosen at run time. Highway's names: "AVX3"
 // = AVX-512, "AVX2", "SSE4", and "EMU128", the one-lane scalar reference.

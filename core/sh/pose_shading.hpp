@@ -121,7 +121,7 @@ struct ShadingStats {
 // One block of float inputs in structure-of-arrays layout: each component a
 // row of its own, rows `stride` floats apart, so the kernel loads whole lane
 // vectors instead of gathering every lane. What the run time writes
-// (visibility/runtime_shading.cpp). Every row must be readable and writable
+// (visibility/frame_shading.cpp). Every row must be readable and writable
 // up to vertex_count rounded up to a multiple of 16 (the widest lanes); the
 // values past vertex_count are read, shaded and discarded, so keep them
 // finite (zeros are best: they cost nothing extra). The frames must be
@@ -143,7 +143,7 @@ class PoseShader;
 
 // One call's constants (operator, lighting, rotation tables, the kernel for
 // this CPU), made once by PoseShader::prepare and used for any number of
-// vertex ranges: the run time (visibility/runtime_shading.hpp) fuses the
+// vertex ranges: the run time (visibility/frame_shading.hpp) fuses the
 // shading with its other per-vertex steps, block by block. Immutable, so
 // several threads may shade ranges at once.
 class PreparedShading {

@@ -19,7 +19,7 @@
 #include "sh/brdf_operator.hpp"
 #include "common/parallel.hpp"
 #include "visibility/ridge_curve.hpp"
-#include "visibility/runtime_kernel.hpp"
+#include "visibility/vertex_kernels.hpp"
 #include "visibility/weight_blocks.hpp"
 
 namespace penumbra::visibility {
@@ -886,7 +886,7 @@ detail::PoseBlocks pose_blocks(const PoseModel& model) {
 void synthesize_params_range(const PoseModel& model, const float* features, std::size_t begin, std::size_t end,
                              float* params_out) {
     // A vertex the model stores as constant has no joint blocks: its
-    // parameters are the bias alone. The loop is runtime_kernel.cpp's (SIMD
+    // parameters are the bias alone. The loop is vertex_kernels.cpp's (SIMD
     // targets chosen at run time).
     detail::apply_pose_blocks(pose_blocks(model), features, begin, end, params_out);
 }
@@ -910,7 +910,7 @@ void synthesize_lobes(const PoseModel& model, const float* joint_rotations, floa
 
 void lobes_from_params(int order, int lobes, std::size_t vertex_count, const float* params, float* axes_out,
                        float* bands_out) {
-    // lambert_to_axis (zh_fit.hpp) in float SIMD lanes (runtime_kernel.cpp).
+    // lambert_to_axis (zh_fit.hpp) in float SIMD lanes (vertex_kernels.cpp).
     detail::lobes_from_params(order, vertex_count * std::size_t(lobes), params, axes_out, bands_out);
 }
 

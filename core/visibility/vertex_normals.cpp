@@ -1,5 +1,5 @@
 // Blender's vertex normals (header: the rule). The topology is prepared
-// here; the arithmetic is runtime_kernel.cpp's, which keeps Blender's float
+// here; the arithmetic is vertex_kernels.cpp's, which keeps Blender's float
 // operations in Blender's order, uncontracted (-ffp-contract=off), so the
 // results are bit-identical to 4.x/5.x on every SIMD target.
 #include "visibility/vertex_normals.hpp"
@@ -9,7 +9,7 @@
 
 #include "common/error.hpp"
 #include "common/parallel.hpp"
-#include "visibility/runtime_kernel.hpp"
+#include "visibility/vertex_kernels.hpp"
 
 namespace penumbra::visibility {
 
@@ -62,7 +62,7 @@ PolygonMesh::PolygonMesh(std::size_t vertex_count, const std::vector<std::uint32
 }
 
 void PolygonMesh::face_pass(const float* positions, float* face_normals, float* corner_angles, int threads) const {
-    // The loops are visibility/runtime_kernel.cpp's, in SIMD lanes of quads
+    // The loops are visibility/vertex_kernels.cpp's, in SIMD lanes of quads
     // and of triangles; blocks of faces_by_size_ split at the class borders.
     const std::size_t borders[] = {0, quad_count_, quad_count_ + triangle_count_, faces_by_size_.size()};
     const int sizes[] = {4, 3, 0};

@@ -26,7 +26,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "visibility/runtime_kernel.hpp"
+#include "visibility/vertex_kernels.hpp"
 
 namespace penumbra::visibility {
 
@@ -56,7 +56,7 @@ public:
     void vertex_normals_of(std::size_t begin, std::size_t end, const float* positions, const float* face_normals,
                            const float* corner_angles, float* normals_out) const;
     // The per-vertex half for callers with their own loops
-    // (runtime_kernel.hpp): this mesh's incidences and the face pass's output.
+    // (vertex_kernels.hpp): this mesh's incidences and the face pass's output.
     detail::NormalSources normal_sources(const float* face_normals, const float* corner_angles) const {
         return {vertex_start_.data(), incident_face_.data(), incident_corner_.data(), face_normals, corner_angles};
     }

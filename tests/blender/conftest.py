@@ -59,12 +59,12 @@ def addon(factory_scene):
     """The add-on registered on a clean file: lookup images beside the test's
     files, no World lighting or visibility model cached from another test."""
     import penumbra
-    from penumbra.visibility import runtime, scene_data
+    from penumbra.visibility import frame_shading, world_lighting
     penumbra.register()
     factory_scene.penumbra.colormap.output_folder = ""
-    scene_data._lighting_cache.clear()
+    world_lighting._lighting_cache.clear()
     try:
         yield factory_scene
     finally:
-        runtime.forget()
+        frame_shading.forget()
         penumbra.unregister()

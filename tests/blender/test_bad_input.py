@@ -41,7 +41,7 @@ from penumbra import native
 from penumbra.colormap import node_groups
 from penumbra.colormap import operators as colormap_operators
 from penumbra.lights import operators as light_operators
-from penumbra.visibility import runtime
+from penumbra.visibility import frame_shading
 
 from colormap_scenes import make_ramp_material, plane_with
 from lights_scenes import rig_state, sky_and_sun, solid_angles, world_with, write_map
@@ -342,7 +342,7 @@ def test_damaged_model_file_is_refused_and_nothing_changes(addon, tmp_path, corr
         data = f.read()
     with open(path, "wb") as f:
         f.write(corrupt(data))
-    runtime.forget()  # as when the .blend is opened again
+    frame_shading.forget()  # as when the .blend is opened again
     previous, before = undo_checkpoint()
     message = refused(bpy.ops.penumbra.apply_visibility, why, "model.pzh", "bake .* again")
     assert scene_state() == before
@@ -397,7 +397,7 @@ def test_mesh_whose_topology_changed_since_the_bake_is_refused(addon, tmp_path, 
     else:
         obj.modifiers.new("Subdivision", "SUBSURF")
     if not held:
-        runtime.forget()
+        frame_shading.forget()
     previous, before = undo_checkpoint()
     refused(bpy.ops.penumbra.apply_visibility, words)
     assert scene_state() == before

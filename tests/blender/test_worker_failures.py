@@ -49,7 +49,7 @@ def test_bake_visibility(addon, tmp_path, kind):
 
 # The run time's parallel stages: Blender's face normals, then the fused pass
 # (normals, frames, lobes, shading) over blocks of vertices.
-@pytest.mark.parametrize("stage", ["visibility.face_normals", "visibility.runtime_frame"])
+@pytest.mark.parametrize("stage", ["visibility.face_normals", "visibility.shade_frame"])
 def test_apply_visibility(addon, tmp_path, stage):
     obj, _ = character(addon, frames=8)
     uniform_world(addon)

@@ -22,7 +22,7 @@ import pytest
 
 from penumbra import compat, native, world
 from penumbra.colormap import interface
-from penumbra.visibility import scene_data
+from penumbra.visibility import world_lighting
 
 from lights_scenes import directions, sky_and_sun, solid_angles, write_map
 
@@ -85,7 +85,7 @@ def _map_world(scene, path, pixels, rotation=None, vector_type="POINT"):
 # What each tool sees ----------------------------------------------------------------
 
 def _sh(scene):
-    lighting, _ = scene_data.world_lighting(scene, ORDER)
+    lighting, _ = world_lighting.world_lighting(scene, ORDER)
     return np.asarray(lighting)
 
 
@@ -315,7 +315,7 @@ def test_a_location_and_scale_are_read_and_what_no_reader_can_take_is_reported(a
     reading = world.read_scene(scene)
     assert reading.kind == "environment" and reading.supported and reading.rotated_image is None
     assert "(remapped)" in reading.note
-    assert scene_data.read_world(scene).supported
+    assert world_lighting.read_world(scene).supported
     _rig(scene, tmp_path, count=8)
     # A Location driven by other nodes: its own value stands in, for both.
     combine = tree.nodes.new("ShaderNodeCombineXYZ")
@@ -593,7 +593,7 @@ def test_a_background_mixed_with_a_constant_colour_lights_as_their_weighted_sum(
     assert _angle(_rig_moment(directions, rgb), _rig_moment(*from_file)) < 1.0
     # The SH lighting is the SH of the same sum.
     expected = _core().sh.project_environment(ORDER, summed.astype(np.float32))
-    assert scene_data.read_world(scene).supported
+    assert world_lighting.read_world(scene).supported
     np.testing.assert_allclose(_sh(scene), expected, rtol=0, atol=1e-3 * np.abs(expected).max())
 
 
@@ -648,7 +648,7 @@ def test_is_camera_ray_lights_with_one_background_and_shows_the_camera_the_other
     expected = 0.8 * (rgb.T @ np.clip(directions[:, 2], 0, None)) / math.pi
     np.testing.assert_allclose(world_lit, expected, rtol=0.03)
     assert np.all(world_lit < 0.5 * 0.8 * 5.0)
-    assert scene_data.read_world(scene).supported
+    assert world_lighting.read_world(scene).supported
     # The rig is the image's alone.
     _map_world(scene, str(tmp_path / "alone.exr"), pixels)
     alone = _rig(scene, tmp_path, count=64, name="alone.json")
@@ -682,7 +682,7 @@ def test_a_mirror_ball_world_is_decomposed_as_a_mirror_ball(addon, tmp_path):
                                             fit_irradiance=False, json_path=json_path) == {"FINISHED"}
     lights = json.load(open(json_path))["frames"][0]["lights"]
     np.testing.assert_allclose(from_world[0], [l["direction"] for l in lights], atol=1e-6)
-    assert scene_data.read_world(scene).supported
+    assert world_lighting.read_world(scene).supported
     lighting = _sh(scene)
     directions, rgb = np.array([l["direction"] for l in lights]), np.array([l["rgb"] for l in lights])
     np.testing.assert_allclose(lighting[0] * math.sqrt(4 * math.pi), rgb.sum(axis=0), rtol=0.02)

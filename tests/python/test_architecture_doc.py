@@ -128,16 +128,16 @@ def test_a_cell_with_prose_or_a_wrong_shape_is_reported():
 
 def test_a_cited_function_or_class_that_is_not_called_is_reported():
     cited = ["_penumbra.visibility.topology_hash", "_penumbra.visibility.mesh_diagnostics",
-             "_penumbra.visibility.RuntimeMesh", "_penumbra.visibility.TrainingSet",
+             "_penumbra.visibility.ShadingMesh", "_penumbra.visibility.TrainingSet",
              "_penumbra.visibility.PoseModel.load"]
     row = one_row(["—", "—", ", ".join(f"`{n}`" for n in cited), "—"])
     classes = doc.cited_classes(row, _penumbra)
-    init = _penumbra.visibility.RuntimeMesh.__dict__["__init__"]
+    init = _penumbra.visibility.ShadingMesh.__dict__["__init__"]
     sizes, loops = np.array([3]), np.array([0, 1, 2])
     with doc.CallRecorder(_penumbra, classes) as recorder:
         _penumbra.visibility.topology_hash(3, sizes, loops)
-        _penumbra.visibility.RuntimeMesh(3, sizes, loops)
-    assert _penumbra.visibility.RuntimeMesh.__dict__["__init__"] is init  # the pass-through is gone
+        _penumbra.visibility.ShadingMesh(3, sizes, loops)
+    assert _penumbra.visibility.ShadingMesh.__dict__["__init__"] is init  # the pass-through is gone
     assert doc.uncalled(row, _penumbra, recorder.called) == [
         f"{row[0].where()}: {name} was not called" for name in cited[1:2] + cited[3:]]
     # An `also` row is not required to be called.

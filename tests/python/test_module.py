@@ -129,6 +129,19 @@ def test_top_level_aliases_are_the_submodule_functions_themselves(alias):
     assert getattr(_penumbra, alias) is getattr(getattr(_penumbra, module), name)
 
 
+# Names renamed in the core keep their old name in _penumbra, bound to the
+# same object, so scripts written against the old name keep working.
+RENAMED = {("visibility", "RuntimeMesh"): "ShadingMesh"}
+
+
+@pytest.mark.parametrize("old", sorted(RENAMED))
+def test_a_renamed_name_is_the_same_object_under_its_old_name(old):
+    module = getattr(_penumbra, old[0])
+    new = getattr(module, RENAMED[old])
+    assert getattr(module, old[1]) is new
+    assert old[1] in new.__doc__  # the docstring says so
+
+
 def _enums():
     for module_name in SUBMODULES:
         module = getattr(_penumbra, module_name)

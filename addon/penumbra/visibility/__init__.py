@@ -8,7 +8,7 @@ Its sidebar section is panel.py (registered by ../panels.py)."""
 
 import bpy
 
-from . import settings, bake, runtime, material, report, gpu_preview, operators, panel  # noqa: F401
+from . import settings, bake, frame_shading, material, report, gpu_preview, operators, panel  # noqa: F401
 
 # Registered before the scene's `penumbra` group, which points at SceneSettings.
 settings_classes = settings.classes
@@ -21,13 +21,13 @@ def register():
     bpy.types.Object.penumbra_visibility = bpy.props.PointerProperty(type=settings.VisibilityObjectSettings)
     for cls in _operator_classes:
         bpy.utils.register_class(cls)
-    runtime.register_handlers()
+    frame_shading.register_handlers()
     gpu_preview.register()
 
 
 def unregister():
     gpu_preview.unregister()
-    runtime.unregister_handlers()
+    frame_shading.unregister_handlers()
     for cls in reversed(_operator_classes):
         bpy.utils.unregister_class(cls)
     del bpy.types.Object.penumbra_visibility

@@ -17,8 +17,8 @@ import time
 import bpy
 
 from .. import native
-from . import scene_data
-from .scene_data import VisibilityInputError
+from . import armature_data, mesh_data
+from .input_error import VisibilityInputError
 
 DEFAULT_EXTENSION = ".pzh"
 
@@ -46,13 +46,13 @@ class BakeJob:
         core = native.require()
         self.scene = context.scene
         self.obj = obj
-        self.armature = scene_data.armature_of(obj)
+        self.armature = armature_data.armature_of(obj)
         if len(obj.data.vertices) == 0:
             raise VisibilityInputError(f"'{obj.name}' has no vertices: nothing to bake")
         if len(obj.data.polygons) == 0:
             raise VisibilityInputError(f"'{obj.name}' has no faces: visibility needs a surface")
         self.actions = list(actions)
-        if not self.actions and not scene_data.armature_has_animation(self.armature):
+        if not self.actions and not armature_data.armature_has_animation(self.armature):
             raise VisibilityInputError(
                 f"armature '{self.armature.name}' has no animation (no action, NLA strip or driver): "
                 "the training poses are the frames of its actions")
@@ -71,10 +71,10 @@ class BakeJob:
         self.threads = threads
         self.bone_names = [b.name for b in self.armature.pose.bones]
         self.vertex_count = len(obj.data.vertices)
-        self.topology = scene_data.topology_hash(obj.data)
-        sizes, loops = scene_data.polygon_topology(obj.data)
+        self.topology = mesh_data.topology_hash(obj.data)
+        sizes, loops = mesh_data.polygon_topology(obj.data)
         self.neighbours = core.visibility.reference_neighbours(self.vertex_count, sizes, loops)
-        self.influence = scene_data.bone_influence(obj, self.armature)
+        self.influence = armature_data.bone_influence(obj, self.armature)
         self.training = core.visibility.TrainingSet(self.vertex_count, self.topology, self.bone_names, order=sh_order,
                                                     rays=rays, below_horizon=below_horizon)
         self.original_frame = self.scene.frame_current
@@ -97,14 +97,14 @@ class BakeJob:
             if self.armature.animation_data.action != action:
                 self.armature.animation_data.action = action
             frame_id = self.actions.index(action) * 100000 + frame
-        from . import runtime
+        from . import frame_shading
         started = time.perf_counter()
-        with runtime.paused():  # the bake's own frame changes need no shading
+        with frame_shading.paused():  # the bake's own frame changes need no shading
             self.scene.frame_set(frame)
         depsgraph = bpy.context.evaluated_depsgraph_get()
         posed = time.perf_counter()
         self.seconds["pose"] += posed - started
-        mesh = scene_data.evaluated_mesh(self.obj, depsgraph)
+        mesh = mesh_data.evaluated_mesh(self.obj, depsgraph)
         if len(mesh.positions) != self.vertex_count or mesh.topology != self.topology:
             changing = [m.name for m in self.obj.modifiers if m.type not in DEFORM_ONLY]
             raise VisibilityInputError(
@@ -118,8 +118,8 @@ class BakeJob:
                     f"the normals of '{self.obj.name}' point inward (signed volume {d['signed_volume']:.3g}); "
                     "fix them with Mesh > Normals > Recalculate Outside, then bake again")
             self.diagnostics = d
-        occluders = scene_data.occluder_meshes(self.occluders, depsgraph, self.obj)
-        rotations = scene_data.bone_rotations(self.armature)
+        occluders = mesh_data.occluder_meshes(self.occluders, depsgraph, self.obj)
+        rotations = armature_data.bone_rotations(self.armature)
         self.seconds["read"] += time.perf_counter() - posed
         return frame_id, mesh, rotations, occluders
 
@@ -280,20 +280,20 @@ def store_result(obj, model, summary, path):
     settings.model_path = path
     settings.report = json.dumps(summary)
     settings.status = ""
-    from . import runtime
-    runtime.forget(obj)
+    from . import frame_shading
+    frame_shading.forget(obj)
 
 
 def fit_and_store(obj, pieces, lobes, path, threads=0, progress=None, job=None, seconds_bake=0.0):
     """Merges training-set pieces (one or many), fits, writes the model, stores the summary."""
     core = native.require()
     training = pieces[0] if len(pieces) == 1 else core.visibility.TrainingSet.merge(list(pieces))
-    armature = scene_data.armature_of(obj)
-    if training.vertex_count != len(obj.data.vertices) or training.topology_hash != scene_data.topology_hash(obj.data):
+    armature = armature_data.armature_of(obj)
+    if training.vertex_count != len(obj.data.vertices) or training.topology_hash != mesh_data.topology_hash(obj.data):
         raise VisibilityInputError(f"the baked frames were made from another mesh than '{obj.name}'")
     if training.bone_names != [b.name for b in armature.pose.bones]:
         raise VisibilityInputError(f"the baked frames were made with another armature than '{armature.name}'")
-    influence = job.influence if job is not None else scene_data.bone_influence(obj, armature)
+    influence = job.influence if job is not None else armature_data.bone_influence(obj, armature)
     started = time.perf_counter()
     model, report = fit_model(training, influence, lobes, threads, progress)
     seconds_fit = time.perf_counter() - started

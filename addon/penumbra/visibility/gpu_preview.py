@@ -9,7 +9,7 @@ untouched by it.
 Per pose, on the CPU (the core, GIL released): step 1, the ZH lobes of the
 pose (`visibility.PoseModel.synthesize`), and the frames of the deformed
 mesh (`visibility.vertex_frames`, the rule the bake used), from the same
-model, mesh, lighting and BRDF settings as runtime.shade_object. They go to
+model, mesh, lighting and BRDF settings as frame_shading.shade_object. They go to
 the GPU as vertex attributes; the lighting, T and the camera as a uniform
 block. The frame-change and depsgraph handlers compute them (object_inputs);
 the SpaceView3D draw callback uploads what changed and draws. Neither ever
@@ -35,9 +35,9 @@ import numpy as np
 from bpy.app.handlers import persistent
 
 from .. import native
-from . import preview_shader, runtime, scene_data
+from . import armature_data, frame_shading, mesh_data, preview_shader, world_lighting
 from .preview_shader import MAX_LOBES, MAX_ORDER, MODELS, check_configuration, lobe_vec4_count  # noqa: F401
-from .scene_data import VisibilityInputError
+from .input_error import VisibilityInputError
 
 READBACK_WIDTH = 1024  # pixels per row when shading into an offscreen buffer, one vertex per pixel
 # Pulls the preview's triangles towards the eye by this fraction of clip w, so
@@ -74,27 +74,27 @@ def inputs_from_arrays(order, lighting, axes, bands, normals, tangents, position
     return PoseInputs(order, axes.shape[1], model, attributes, tri, uniforms)
 
 
-_mesh_buffers = {}  # object name -> scene_data.MeshBuffers (the preview's own: the CPU run time reuses its)
+_mesh_buffers = {}  # object name -> mesh_data.MeshBuffers (the preview's own: the CPU run time reuses its)
 
 
 def object_inputs(obj, scene, depsgraph=None):
     """PoseInputs of an enabled object at the scene's current state: the same
-    model, mesh, frames, lighting and BRDF as runtime.shade_object.
+    model, mesh, frames, lighting and BRDF as frame_shading.shade_object.
     Raises VisibilityInputError / ValueError / OSError like it."""
     t0 = time.perf_counter()
     core = native.require()
-    entry = runtime.loaded_model(obj)
+    entry = frame_shading.loaded_model(obj)
     model = entry.model
     settings = obj.penumbra_visibility
     brdf = settings.brdf.lower()
     check_configuration(model.order, model.lobes, brdf)
-    armature = scene_data.armature_of(obj)
-    rotations = scene_data.bone_rotations(armature, model.joints)
+    armature = armature_data.armature_of(obj)
+    rotations = armature_data.bone_rotations(armature, model.joints)
     depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
     buffers = _mesh_buffers.get(obj.name)
     if buffers is None or buffers.vertex_count != model.vertex_count:
-        buffers = _mesh_buffers[obj.name] = scene_data.MeshBuffers(obj.data)
-    frame = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False, buffers=buffers)
+        buffers = _mesh_buffers[obj.name] = mesh_data.MeshBuffers(obj.data)
+    frame = mesh_data.evaluated_mesh(obj, depsgraph, with_topology=False, buffers=buffers)
     if len(frame.positions) != model.vertex_count:
         raise VisibilityInputError(f"'{obj.name}' has {len(frame.positions)} vertices after its modifiers; "
                                    f"the model has {model.vertex_count}")
@@ -105,7 +105,7 @@ def object_inputs(obj, scene, depsgraph=None):
     frames, _ = core.visibility.vertex_frames(frame.positions, frame.normals, entry.buffers.triangles,
                                               entry.neighbours)
     t3 = time.perf_counter()
-    lighting, _ = scene_data.world_lighting(scene, model.order)
+    lighting, _ = world_lighting.world_lighting(scene, model.order)
     camera = np.array(scene.camera.matrix_world.translation) if scene.camera else np.zeros(3)
     inputs = inputs_from_arrays(model.order, lighting, axes, bands, frames[:, 2], frames[:, 0],
                                 positions=frame.positions, model=brdf, phong_exponent=settings.phong_exponent,
@@ -387,20 +387,20 @@ def _draw():
 def _armature_or_view_changed(scene, depsgraph):
     relevant = any(isinstance(u.id, bpy.types.World) or
                    (isinstance(u.id, bpy.types.Object) and u.id.type == "CAMERA") for u in depsgraph.updates)
-    return relevant or runtime._drives_enabled_object(scene, depsgraph.updates)
+    return relevant or frame_shading._drives_enabled_object(scene, depsgraph.updates)
 
 
-# runtime._busy: a bake is posing the scene frame by frame (runtime.paused),
+# frame_shading._busy: a bake is posing the scene frame by frame (frame_shading.paused),
 # or the CPU run time is writing its attributes.
 @persistent
 def on_frame_change(scene, depsgraph=None):
-    if scene.penumbra.visibility.gpu_preview and not runtime._busy:
+    if scene.penumbra.visibility.gpu_preview and not frame_shading._busy:
         update(scene, depsgraph)
 
 
 @persistent
 def on_depsgraph_update(scene, depsgraph):
-    if scene.penumbra.visibility.gpu_preview and not runtime._busy and _armature_or_view_changed(scene, depsgraph):
+    if scene.penumbra.visibility.gpu_preview and not frame_shading._busy and _armature_or_view_changed(scene, depsgraph):
         update(scene, depsgraph)
 
 

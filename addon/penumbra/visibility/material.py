@@ -4,7 +4,7 @@ wired into the object's material so Cycles and Eevee renders show it."""
 import bpy
 
 from ..compat import ensure_nodes
-from .runtime import SHADING_ATTRIBUTE
+from .frame_shading import SHADING_ATTRIBUTE
 
 NODE_NAME = "Penumbra Shading"
 

@@ -1,7 +1,7 @@
 """The visibility tool's operators (names are a contract):
 penumbra.bake_visibility (bake.py's pipeline, run by modal_job.py: modal
 with Esc from the UI, synchronous from scripts), penumbra.apply_visibility
-(runtime.py's shading at the current frame) and penumbra.setup_material
+(frame_shading.py's shading at the current frame) and penumbra.setup_material
 (material.py)."""
 
 import os
@@ -14,8 +14,8 @@ from ..core_settings import limits
 from ..errors import CORE_ERRORS, describe
 from .bake import BakeJob, fit_model, resolve_path, store_result, summary_of
 from .material import SHADING_ATTRIBUTE, setup_material
-from .runtime import shade_object
-from .scene_data import VisibilityInputError
+from .frame_shading import shade_object
+from .input_error import VisibilityInputError
 
 
 class PENUMBRA_OT_bake_visibility(modal_job.JobOperator, bpy.types.Operator):

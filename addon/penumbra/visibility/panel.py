@@ -85,7 +85,7 @@ class PENUMBRA_PT_visibility_shading(_MeshSubPanel, bpy.types.Panel):
 
 def _draw_world(layout, context):
     """What the shading reads from the World, in red when part of it cannot be read."""
-    from .scene_data import read_world
+    from .world_lighting import read_world
     column = layout.column()
     try:
         world = read_world(context.scene)

@@ -9,9 +9,9 @@ from ..core_settings import limits
 
 
 def _refresh(self, context):
-    # Late import: runtime imports this module.
-    from . import runtime, gpu_preview
-    runtime.request_refresh()
+    # Late import: frame_shading imports this module.
+    from . import frame_shading, gpu_preview
+    frame_shading.request_refresh()
     gpu_preview.request_refresh()
 
 

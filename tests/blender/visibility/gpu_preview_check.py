@@ -11,7 +11,7 @@ per pixel) and compares per vertex with the CPU:
   1. the procedural test character, baked (order 4, 2 lobes), unseen poses,
      a non-uniform environment World and the scene camera, each BRDF: the
      preview's inputs (gpu_preview.object_inputs) shaded on the GPU against
-     runtime.shade_object, the CPU run time that writes the attributes, and
+     frame_shading.shade_object, the CPU run time that writes the attributes, and
      against the attributes themselves;
   2. random lobes, frames, positions, lighting and cameras (poles, cameras
      behind the surface, invalid vertices) for every SH order 1–8, 1–4 lobes
@@ -53,7 +53,7 @@ if "--gpu-init" in ARGS:
     gpu.init()
 
 import penumbra  # noqa: E402
-from penumbra.visibility import gpu_preview, runtime  # noqa: E402
+from penumbra.visibility import frame_shading, gpu_preview  # noqa: E402
 import visibility_character  # noqa: E402
 
 
@@ -144,16 +144,16 @@ def pipeline_comparison(scene, obj):
         scene.frame_set(frame)
         for brdf in ("DIFFUSE", "PHONG", "TRANSLUCENT"):
             settings.brdf = brdf
-            rgb, ao, _ = runtime.shade_object(obj, scene)        # CPU; writes the attributes
+            rgb, ao, _ = frame_shading.shade_object(obj, scene)        # CPU; writes the attributes
             inputs = gpu_preview.object_inputs(obj, scene)
             gpu_rgb, gpu_visibility = gpu_preview.shade_offscreen(inputs)
-            # The attributes hold the clamped values (runtime.shade_object); clamp the same way.
+            # The attributes hold the clamped values (frame_shading.shade_object); clamp the same way.
             gpu_rgb = np.maximum(gpu_rgb, 0.0)
             gpu_visibility = np.clip(gpu_visibility, 0.0, 1.0)
             d_rgb = float(np.abs(gpu_rgb - rgb).max())
             d_vis = float(np.abs(gpu_visibility - ao).max())
-            stored = attribute(obj, runtime.SHADING_ATTRIBUTE, 4)[:, :3]
-            stored_ao = attribute(obj, runtime.VISIBILITY_ATTRIBUTE, 1)
+            stored = attribute(obj, frame_shading.SHADING_ATTRIBUTE, 4)[:, :3]
+            stored_ao = attribute(obj, frame_shading.VISIBILITY_ATTRIBUTE, 1)
             d_attr = float(max(np.abs(gpu_rgb - stored).max(), np.abs(gpu_visibility - stored_ao).max()))
             out["max_abs_rgb"] = max(out["max_abs_rgb"], d_rgb)
             out["max_abs_visibility"] = max(out["max_abs_visibility"], d_vis)
@@ -366,7 +366,7 @@ def main():
         result["random"] = random_comparison(RANDOM_VERTICES, SWEEP)
         result["timing"] = [timing(scene, obj)]
         if TIMING_VERTICES:
-            runtime.forget()
+            frame_shading.forget()
             scene, obj, bake_seconds = baked_character(TIMING_VERTICES, frames=8, rays=16)
             result["timing"].append(timing(scene, obj))
             result["timing"][-1]["bake_seconds"] = round(bake_seconds, 2)

@@ -17,7 +17,7 @@ import pytest
 
 import penumbra
 from penumbra import compat, native
-from penumbra.visibility import gpu_preview, preview_shader, runtime
+from penumbra.visibility import frame_shading, gpu_preview, preview_shader
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
@@ -28,9 +28,9 @@ import visibility_character  # noqa: E402
 def attributes(obj):
     mesh = obj.data
     rgba = np.empty(len(mesh.vertices) * 4, dtype=np.float32)
-    mesh.attributes[runtime.SHADING_ATTRIBUTE].data.foreach_get("color", rgba)
+    mesh.attributes[frame_shading.SHADING_ATTRIBUTE].data.foreach_get("color", rgba)
     ao = np.empty(len(mesh.vertices), dtype=np.float32)
-    mesh.attributes[runtime.VISIBILITY_ATTRIBUTE].data.foreach_get("value", ao)
+    mesh.attributes[frame_shading.VISIBILITY_ATTRIBUTE].data.foreach_get("value", ao)
     return rgba.reshape(-1, 4), ao
 
 

@@ -16,7 +16,7 @@ from mathutils import Vector
 from mathutils.bvhtree import BVHTree
 
 from penumbra import native
-from penumbra.visibility import bake, scene_data
+from penumbra.visibility import armature_data, bake, mesh_data, world_lighting
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
@@ -55,7 +55,7 @@ def blender_ao(obj, indices, rays=400, seed=3):
         verts = [world @ v.co for v in mesh.vertices]
         mesh.calc_loop_triangles()
         tris = [tuple(t.vertices) for t in mesh.loop_triangles]
-        normals = scene_data._vertex_normals(mesh)
+        normals = mesh_data._vertex_normals(mesh)
     finally:
         evaluated.to_mesh_clear()
     tree = BVHTree.FromPolygons(verts, tris)
@@ -85,7 +85,7 @@ def test_the_stored_model_beats_a_pose_ignoring_model_on_held_out_frames(addon):
     the same held-out frames (every 4th, as FitSettings.holdout_stride)."""
     obj, _ = character(addon)
     _, training = bake.bake_training_set(bpy.context, obj, 1, 24, 2, rays=64)
-    _, report = bake.fit_model(training, scene_data.bone_influence(obj, scene_data.armature_of(obj)), lobes=2)
+    _, report = bake.fit_model(training, armature_data.bone_influence(obj, armature_data.armature_of(obj)), lobes=2)
     frames = len(training)
     holdout = [f for f in range(frames) if f % 4 == 3]
     train = [f for f in range(frames) if f % 4 != 3]
@@ -150,8 +150,8 @@ def test_mesh_reading_matches_blender_triangles_and_transforms(addon):
         normal_matrix = world.to_3x3().inverted().transposed()
         positions = np.array([world @ v.co for v in mesh.vertices])
         normals = np.array([normal_matrix @ v.normal for v in mesh.vertices])
-        fixed = scene_data.mesh_triangles(mesh, fixed_split=True)
-        sizes, loops = scene_data.polygon_topology(mesh)
+        fixed = mesh_data.mesh_triangles(mesh, fixed_split=True)
+        sizes, loops = mesh_data.polygon_topology(mesh)
     finally:
         evaluated.to_mesh_clear()
     # The fixed split (run time only): the polygons' own vertices, two triangles per quad, as many as Blender's.
@@ -163,10 +163,10 @@ def test_mesh_reading_matches_blender_triangles_and_transforms(addon):
         for _ in range(size - 2):
             assert set(fixed[k]) <= corners and len(set(fixed[k])) == 3
             k += 1
-    buffers = scene_data.MeshBuffers(obj.data)
+    buffers = mesh_data.MeshBuffers(obj.data)
     for _ in range(2):  # reused arrays give the same as fresh ones
-        fresh = scene_data.evaluated_mesh(obj, depsgraph)
-        reused = scene_data.evaluated_mesh(obj, depsgraph, with_topology=False, buffers=buffers)
+        fresh = mesh_data.evaluated_mesh(obj, depsgraph)
+        reused = mesh_data.evaluated_mesh(obj, depsgraph, with_topology=False, buffers=buffers)
         for frame in (fresh, reused):
             assert np.abs(frame.positions - positions).max() < 1e-4
             assert np.abs(frame.normals - normals).max() < 1e-4
@@ -175,12 +175,12 @@ def test_mesh_reading_matches_blender_triangles_and_transforms(addon):
         assert fresh.triangles.shape == blender_tris.shape
         assert (fresh.triangles != blender_tris).any(axis=1).sum() <= 0.002 * len(blender_tris)
         assert np.array_equal(reused.triangles, fixed)
-    assert fresh.topology == scene_data.topology_hash(obj.data)
+    assert fresh.topology == mesh_data.topology_hash(obj.data)
     # An n-gon goes through Blender's own triangulation even with the fixed split.
     bpy.ops.mesh.primitive_circle_add(vertices=7, fill_type="NGON")
     circle = bpy.context.active_object.data
     circle.calc_loop_triangles()
-    assert np.array_equal(scene_data.mesh_triangles(circle, fixed_split=True),
+    assert np.array_equal(mesh_data.mesh_triangles(circle, fixed_split=True),
                           np.array([tuple(t.vertices) for t in circle.loop_triangles]))
 
 
@@ -264,7 +264,7 @@ def test_world_value_and_rgb_nodes_are_read_and_sky_texture_is_reported(addon, t
     rgb_node = tree.nodes.new("ShaderNodeRGB")
     rgb_node.outputs[0].default_value = (0.2, 0.5, 1.0, 1.0)
     tree.links.new(rgb_node.outputs[0], background.inputs["Color"])
-    reading = scene_data.read_world(addon)
+    reading = world_lighting.read_world(addon)
     assert reading.supported and reading.kind == "uniform" and reading.strength == 3.0
     assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
     lit = attribute(obj, "penumbra_shading", 4)[:, :3]
@@ -273,15 +273,15 @@ def test_world_value_and_rgb_nodes_are_read_and_sky_texture_is_reported(addon, t
     sky = tree.nodes.new("ShaderNodeTexSky")
     tree.links.new(sky.outputs["Color"], background.inputs["Color"])
     background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    reading = scene_data.read_world(addon)
+    reading = world_lighting.read_world(addon)
     assert not reading.supported and "Sky Texture is not supported" in reading.note
-    lighting, note = scene_data.world_lighting(addon, 4)
+    lighting, note = world_lighting.world_lighting(addon, 4)
     assert note == reading.note
     assert lighting[0, 0] == pytest.approx(3.0 * math.sqrt(4 * math.pi)) and not lighting[1:].any()
     # A Strength fed by something else than a Value node: unsupported, its own value is used.
     tree.links.new(tree.nodes.new("ShaderNodeMath").outputs[0], background.inputs["Strength"])
     background.inputs["Strength"].default_value = 0.5
-    reading = scene_data.read_world(addon)
+    reading = world_lighting.read_world(addon)
     assert not reading.supported and reading.strength == 0.5 and "Strength" in reading.note
 
 
@@ -563,21 +563,21 @@ def test_run_time_normals_are_blenders_own(addon):
     there; Blender 3.4 takes the exact arc cosine and a quad's normal from
     its diagonals (measured: at most 8e-6 apart on this character)."""
     obj, rig = character(addon)
-    sizes, loops = scene_data.polygon_topology(obj.data)
-    runtime_mesh = native.require().visibility.RuntimeMesh(len(obj.data.vertices), sizes, loops)
+    sizes, loops = mesh_data.polygon_topology(obj.data)
+    shading_mesh = native.require().visibility.ShadingMesh(len(obj.data.vertices), sizes, loops)
     for frame in (4, 11):
         addon.frame_set(frame)
         evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
         mesh = evaluated.to_mesh()
         try:
-            positions = scene_data._vertex_positions(mesh)
-            blender = scene_data._vertex_normals(mesh)
+            positions = mesh_data._vertex_positions(mesh)
+            blender = mesh_data._vertex_normals(mesh)
         finally:
             evaluated.to_mesh_clear()
-        ours = runtime_mesh.vertex_normals(positions)
+        ours = shading_mesh.vertex_normals(positions)
         if bpy.app.version >= (4, 5, 0):
             assert np.array_equal(ours, blender), np.abs(ours - blender).max()
         else:
             assert np.abs(ours - blender).max() < 1e-4
         # Posed: the rest pose's normals would be far off somewhere.
-        assert np.abs(ours - scene_data._vertex_normals(obj.data)).max() > 0.1
+        assert np.abs(ours - mesh_data._vertex_normals(obj.data)).max() > 0.1

@@ -32,19 +32,19 @@ def errors():
     """held_out_errors() of the model fitted on the other frames."""
     import penumbra
     from penumbra import native
-    from penumbra.visibility import runtime, scene_data
+    from penumbra.visibility import armature_data, frame_shading
     core = native.require()
     penumbra.register()
     try:
         obj, rig, _ = humanoid.new_humanoid(DETAIL, FRAMES)
         training = bake_frames(obj, [f for f in range(1, FRAMES + 1) if f not in HELD_OUT],
                                humanoid.RAYS, humanoid.ORDER).training
-        model, _, _ = humanoid.fit(core, training, scene_data.bone_influence(obj, rig))
+        model, _, _ = humanoid.fit(core, training, armature_data.bone_influence(obj, rig))
         held_out = bake_frames(obj, HELD_OUT, humanoid.RAYS, humanoid.ORDER).training
         cycles, _ = cycles_ao(obj, HELD_OUT, humanoid.CYCLES_SAMPLES)
         return held_out_errors(core, model_sh(model, held_out), training, held_out, cycles)
     finally:
-        runtime.forget()
+        frame_shading.forget()
         penumbra.unregister()
 
 

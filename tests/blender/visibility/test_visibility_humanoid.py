@@ -14,7 +14,7 @@ import pytest
 
 import penumbra
 from penumbra import native
-from penumbra.visibility import runtime, scene_data
+from penumbra.visibility import armature_data, frame_shading, mesh_data
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
@@ -32,7 +32,7 @@ def humanoid():
         obj, rig = visibility_humanoid.build(detail=0.25, frames=FRAMES)
         yield bpy.context.scene, obj, rig
     finally:
-        runtime.forget()
+        frame_shading.forget()
         penumbra.unregister()
 
 
@@ -51,7 +51,7 @@ def rotation_angles(scene, rig):
     largest = np.zeros(len(rig.pose.bones))
     for frame in range(1, FRAMES + 1):
         scene.frame_set(frame)
-        r = scene_data.bone_rotations(rig).astype(np.float64)
+        r = armature_data.bone_rotations(rig).astype(np.float64)
         if first is None:
             first = r
         cosine = (np.einsum("bij,bij->b", first, r) - 1.0) / 2.0
@@ -71,8 +71,8 @@ def test_the_humanoid_is_a_closed_outward_skin_of_about_the_asked_size(humanoid)
             counts[key] = counts.get(key, 0) + 1
     assert len(counts) == len(mesh.edges) and set(counts.values()) == {2}
     positions = np.array([v.co for v in mesh.vertices], dtype=np.float32)
-    normals = scene_data._vertex_normals(mesh)
-    triangles = scene_data.mesh_triangles(mesh)
+    normals = mesh_data._vertex_normals(mesh)
+    triangles = mesh_data.mesh_triangles(mesh)
     diagnostics = native.require().visibility.mesh_diagnostics(positions, normals, triangles)
     assert not diagnostics["normals_point_inward"] and diagnostics["signed_volume"] > 0.02  # m³, a person
     # A person-sized figure: about 1.5 m from toes to the top of the head.
@@ -126,6 +126,6 @@ def test_the_visibility_baker_bakes_and_shades_the_humanoid(humanoid, tmp_path):
     scene.frame_set(7)
     assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
     ao = np.empty(len(obj.data.vertices), dtype=np.float32)
-    obj.data.attributes[runtime.VISIBILITY_ATTRIBUTE].data.foreach_get("value", ao)
+    obj.data.attributes[frame_shading.VISIBILITY_ATTRIBUTE].data.foreach_get("value", ao)
     assert np.all(np.isfinite(ao)) and 0.2 < ao.mean() < 0.95
     assert ao.min() < 0.5  # armpits, between the fingers, between the legs: shadowed

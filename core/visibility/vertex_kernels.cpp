@@ -1,4 +1,4 @@
-// The run time's SIMD loops (header: what they compute). Same scheme as
+// The per-vertex and per-face SIMD loops (header: what they compute). Same scheme as
 // sh/pose_shading_kernel.cpp: Highway's foreach_target compiles this file
 // once per SIMD target, each copy in its own namespace under that target's
 // `#pragma GCC target`; lane vectors are GCC/Clang vector extensions of one
@@ -8,7 +8,7 @@
 
 #include "common/simd_compiled_targets.hpp"  // before any Highway header
 #undef HWY_TARGET_INCLUDE
-#define HWY_TARGET_INCLUDE "visibility/runtime_kernel.cpp"
+#define HWY_TARGET_INCLUDE "visibility/vertex_kernels.cpp"
 #include <hwy/foreach_target.h>  // re-includes this file once per target
 #include <hwy/highway.h>
 
@@ -19,7 +19,7 @@
 #include <numbers>
 
 #include "common/simd_lanes-inl.h"
-#include "visibility/runtime_kernel.hpp"
+#include "visibility/vertex_kernels.hpp"
 
 HWY_BEFORE_NAMESPACE();
 namespace penumbra::visibility::detail::HWY_NAMESPACE {

@@ -1,6 +1,7 @@
-// Internal to the run time (visibility/runtime_shading.hpp): its per-vertex
-// and per-face loops in SIMD lanes of floats, compiled once per target by
-// Highway (visibility/runtime_kernel.cpp, like sh/pose_shading_kernel.cpp)
+// Internal to the frame shading (visibility/frame_shading.hpp), Blender's
+// vertex normals and the pose model's synthesis: their per-vertex and
+// per-face loops in SIMD lanes of floats, compiled once per target by
+// Highway (visibility/vertex_kernels.cpp, like sh/pose_shading_kernel.cpp)
 // and chosen at run time, so the portable build runs AVX-512 or AVX2 where
 // the CPU has them. EMU128 (one lane) is the scalar reference.
 #pragma once

@@ -1,4 +1,4 @@
-#include "visibility/runtime_shading.hpp"
+#include "visibility/frame_shading.hpp"
 
 #include <algorithm>
 #include <array>
@@ -12,11 +12,11 @@
 
 #include "common/error.hpp"
 #include "common/parallel.hpp"
-#include "visibility/runtime_kernel.hpp"
+#include "visibility/vertex_kernels.hpp"
 
 namespace penumbra::visibility {
 
-RuntimeResult shade_pose_model(const PoseModel& model, const sh::PoseShader& shader, const float* joint_rotations,
+ShadingResult shade_pose_model(const PoseModel& model, const sh::PoseShader& shader, const float* joint_rotations,
                                const std::vector<float>& positions, const std::vector<float>& normals,
                                const std::vector<std::uint32_t>& triangles,
                                const std::vector<std::uint32_t>& neighbours, const Eigen::MatrixXd& lighting,
@@ -29,7 +29,7 @@ RuntimeResult shade_pose_model(const PoseModel& model, const sh::PoseShader& sha
     if (shader.order() != model.order)
         throw ArgumentError("shader order " + std::to_string(shader.order()) + " differs from the model's " +
                             std::to_string(model.order));
-    RuntimeResult result;
+    ShadingResult result;
     const int d = model.params_per_vertex();
 
     // §4.3 step 1: ZH lobes from the pose.
@@ -70,7 +70,7 @@ RuntimeResult shade_pose_model(const PoseModel& model, const sh::PoseShader& sha
 }
 
 
-RuntimeMesh::RuntimeMesh(std::size_t vertex_count, const std::vector<std::uint32_t>& polygon_sizes,
+ShadingMesh::ShadingMesh(std::size_t vertex_count, const std::vector<std::uint32_t>& polygon_sizes,
                          const std::vector<std::uint32_t>& polygon_vertices)
     : polygons(vertex_count, polygon_sizes, polygon_vertices),
       neighbours(reference_neighbours(vertex_count, polygon_sizes, polygon_vertices)) {}
@@ -91,7 +91,7 @@ enum Step { kFrames, kLobes, kShading, kSteps };
 // What one frame shares between the tasks.
 struct FrameJob {
     const PoseModel& model;
-    const RuntimeMesh& mesh;
+    const ShadingMesh& mesh;
     const sh::PreparedShading& shading;
     const float* features;
     const float* positions;
@@ -117,7 +117,7 @@ struct TaskTotals {
 };
 
 // Blender's normal of each vertex, then world normals, positions and
-// tangents (runtime_kernel.hpp, SIMD lanes).
+// tangents (vertex_kernels.hpp, SIMD lanes).
 void chunk_frames(const FrameJob& job, std::size_t begin, std::size_t end, ChunkScratch& s, TaskTotals& totals) {
     detail::FrameCounts counts;
     detail::frames_range(job.transform, job.mesh.polygons.normal_sources(job.face_normals, job.corner_angles),
@@ -193,7 +193,7 @@ detail::FrameTransform frame_transform(const Eigen::Matrix4d& world) {
 
 }  // namespace
 
-FrameResult shade_frame(const PoseModel& model, const sh::PoseShader& shader, const RuntimeMesh& mesh,
+FrameResult shade_frame(const PoseModel& model, const sh::PoseShader& shader, const ShadingMesh& mesh,
                         const float* joint_rotations, const float* positions, const Eigen::Matrix4d& world,
                         const Eigen::MatrixXd& lighting, const sh::ShadingParameters& parameters, float* rgba_out,
                         float* visibility_out) {
@@ -223,7 +223,7 @@ FrameResult shade_frame(const PoseModel& model, const sh::PoseShader& shader, co
                  frame_transform(world), rgba_out, visibility_out};
 
     std::vector<TaskTotals> totals(block_count(V, kTask));
-    parallel_blocks(V, {parameters.threads, kTask, "visibility.runtime_frame"},
+    parallel_blocks(V, {parameters.threads, kTask, "visibility.shade_frame"},
                     [&](std::size_t task, std::size_t begin, std::size_t end) { run_task(job, begin, end, totals[task]); });
     const auto t2 = Clock::now();
 

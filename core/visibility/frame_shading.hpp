@@ -30,7 +30,7 @@
 
 namespace penumbra::visibility {
 
-struct RuntimeTimings {
+struct ShadingTimings {
     // Seconds. shade_frame: normals is the face pass (face normals and
     // corner angles, its own parallel loop); the fused pass's wall time is
     // split in proportion to the thread time each step took, frames then
@@ -42,19 +42,19 @@ struct RuntimeTimings {
     double shading = 0.0;        // PoseShader (and, in shade_frame, the clamped write)
 };
 
-struct RuntimeResult {
+struct ShadingResult {
     std::vector<float> rgb;         // V × 3, scene-linear
     std::vector<float> visibility;  // V, cosine-weighted visibility (AO) in [0, 1] up to SH ringing
     sh::ShadingStats stats;
     FrameStats frame_stats;
-    RuntimeTimings timings;
+    ShadingTimings timings;
 };
 
 // joint_rotations: model.joints × 9 (row-major rest-relative rotations);
 // positions and normals: V × 3 world space of the deformed mesh; triangles and
 // neighbours as at bake time (reference_neighbours); lighting (order², 3).
 // The shader's order must equal the model's. ArgumentError on size mismatch.
-RuntimeResult shade_pose_model(const PoseModel& model, const sh::PoseShader& shader, const float* joint_rotations,
+ShadingResult shade_pose_model(const PoseModel& model, const sh::PoseShader& shader, const float* joint_rotations,
                                const std::vector<float>& positions, const std::vector<float>& normals,
                                const std::vector<std::uint32_t>& triangles,
                                const std::vector<std::uint32_t>& neighbours, const Eigen::MatrixXd& lighting,
@@ -62,8 +62,8 @@ RuntimeResult shade_pose_model(const PoseModel& model, const sh::PoseShader& sha
 
 // What shade_frame keeps of a mesh from frame to frame: its polygons and
 // reference neighbours (the bake's).
-struct RuntimeMesh {
-    RuntimeMesh(std::size_t vertex_count, const std::vector<std::uint32_t>& polygon_sizes,
+struct ShadingMesh {
+    ShadingMesh(std::size_t vertex_count, const std::vector<std::uint32_t>& polygon_sizes,
                 const std::vector<std::uint32_t>& polygon_vertices);
     PolygonMesh polygons;
     std::vector<std::uint32_t> neighbours;
@@ -81,7 +81,7 @@ struct RuntimeMesh {
 struct FrameResult {
     sh::ShadingStats stats;
     FrameStats frame_stats;  // repaired_normals: Blender's rule gave a zero normal (+z world used)
-    RuntimeTimings timings;
+    ShadingTimings timings;
 };
 
 // One frame: joint_rotations as for shade_pose_model; positions V × 3 in object
@@ -90,7 +90,7 @@ struct FrameResult {
 // Writes rgba_out (V × 4: scene-linear RGB clamped to ≥ 0, alpha 1) and
 // visibility_out (V, clamped to [0, 1]). ArgumentError on a size or order
 // mismatch, before anything is written.
-FrameResult shade_frame(const PoseModel& model, const sh::PoseShader& shader, const RuntimeMesh& mesh,
+FrameResult shade_frame(const PoseModel& model, const sh::PoseShader& shader, const ShadingMesh& mesh,
                         const float* joint_rotations, const float* positions, const Eigen::Matrix4d& world,
                         const Eigen::MatrixXd& lighting, const sh::ShadingParameters& parameters, float* rgba_out,
                         float* visibility_out);

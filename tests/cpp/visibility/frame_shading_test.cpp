@@ -1,4 +1,4 @@
-// The fused run time (visibility/runtime_shading.hpp) and Blender's vertex
+// The fused frame shading (visibility/frame_shading.hpp) and Blender's vertex
 // normals (visibility/vertex_normals.hpp): against straightforward
 // double-precision versions of the same rules, against the separate-pass
 // path with the same inputs, and across SIMD targets and thread counts.
@@ -15,7 +15,7 @@
 #include "common/error.hpp"
 #include "common/simd_target.hpp"
 #include "sh/pose_shading.hpp"
-#include "visibility/runtime_shading.hpp"
+#include "visibility/frame_shading.hpp"
 #include "visibility/vertex_normals.hpp"
 #include "visibility/zh_fit.hpp"
 
@@ -209,7 +209,7 @@ void expect_fused_frame_matches_separate_passes(std::mt19937_64& rng, sh::Shadin
                                                 const std::string& target) {
     const FrameCase c = frame_case(rng, shading);
     const std::size_t V = c.polygons.vertex_count();
-    const RuntimeMesh mesh(V, c.polygons.sizes, c.polygons.loops);
+    const ShadingMesh mesh(V, c.polygons.sizes, c.polygons.loops);
     const sh::PoseShader shader(4);
     std::vector<float> rgba(4 * V, -1.0f), ao(V, -1.0f);
     const FrameResult fused = shade_frame(c.model, shader, mesh, c.rotations.data(), c.polygons.positions.data(),
@@ -226,7 +226,7 @@ void expect_fused_frame_matches_separate_passes(std::mt19937_64& rng, sh::Shadin
             world_normals[3 * v + k] = float(n[k]);
         }
     }
-    const RuntimeResult separate = shade_pose_model(c.model, shader, c.rotations.data(), world_positions,
+    const ShadingResult separate = shade_pose_model(c.model, shader, c.rotations.data(), world_positions,
                                                     world_normals, {}, mesh.neighbours, c.lighting, c.parameters);
     EXPECT_EQ(fused.stats.invalid_vertices, separate.stats.invalid_vertices);
     double largest = 0.0, scale = 0.0;
@@ -253,7 +253,7 @@ void expect_fused_frame_matches_separate_passes(std::mt19937_64& rng, sh::Shadin
 
 // The fused pass (its loops and the shader's structure-of-arrays input)
 // computes what the separate passes do, on every SIMD target.
-TEST(RuntimeShading, fused_frame_matches_the_separate_passes_on_every_target) {
+TEST(FrameShading, fused_frame_matches_the_separate_passes_on_every_target) {
     std::mt19937_64 rng(3);
     for (const std::string& target : simd_targets()) {
         force_simd_target(target);
@@ -264,11 +264,11 @@ TEST(RuntimeShading, fused_frame_matches_the_separate_passes_on_every_target) {
     force_simd_target("");
 }
 
-TEST(RuntimeShading, results_do_not_depend_on_thread_count) {
+TEST(FrameShading, results_do_not_depend_on_thread_count) {
     std::mt19937_64 rng(4);
     FrameCase c = frame_case(rng, sh::ShadingModel::phong);
     const std::size_t V = c.polygons.vertex_count();
-    const RuntimeMesh mesh(V, c.polygons.sizes, c.polygons.loops);
+    const ShadingMesh mesh(V, c.polygons.sizes, c.polygons.loops);
     const sh::PoseShader shader(4);
     std::vector<float> first_rgba, first_ao;
     for (const int threads : {1, 2, 3}) {
@@ -282,14 +282,14 @@ TEST(RuntimeShading, results_do_not_depend_on_thread_count) {
     }
 }
 
-TEST(RuntimeShading, mismatches_are_argument_errors_before_anything_is_written) {
+TEST(FrameShading, mismatches_are_argument_errors_before_anything_is_written) {
     std::mt19937_64 rng(5);
     FrameCase c = frame_case(rng, sh::ShadingModel::diffuse);
     const std::size_t V = c.polygons.vertex_count();
-    const RuntimeMesh mesh(V, c.polygons.sizes, c.polygons.loops);
-    const RuntimeMesh other(V + 1, c.polygons.sizes, c.polygons.loops);
+    const ShadingMesh mesh(V, c.polygons.sizes, c.polygons.loops);
+    const ShadingMesh other(V + 1, c.polygons.sizes, c.polygons.loops);
     std::vector<float> rgba(4 * V, -7.0f), ao(V, -7.0f);
-    const auto shade = [&](const RuntimeMesh& m, const sh::PoseShader& s) {
+    const auto shade = [&](const ShadingMesh& m, const sh::PoseShader& s) {
         return shade_frame(c.model, s, m, c.rotations.data(), c.polygons.positions.data(), c.world, c.lighting,
                            c.parameters, rgba.data(), ao.data());
     };
@@ -307,7 +307,7 @@ TEST(RuntimeShading, mismatches_are_argument_errors_before_anything_is_written) 
 // The shader turns the model's lobe parameters into axes itself
 // (PoseBuffers::lobe_params): the same as zh_fit's lambert_to_axis, also
 // for points beyond the disc and non-finite ones.
-TEST(RuntimeShading, lobe_parameters_shade_like_the_axes_lambert_to_axis_gives) {
+TEST(FrameShading, lobe_parameters_shade_like_the_axes_lambert_to_axis_gives) {
     std::mt19937_64 rng(6);
     std::uniform_real_distribution<double> uniform(-2.5, 2.5);
     const int order = 4, lobes = 2;

@@ -1,4 +1,4 @@
-"""Run time: on every frame change and pose edit, shade each enabled object
+"""Frame shading: on every frame change and pose edit, shade each enabled object
 from its visibility model (paper §4.3) under the World's SH lighting, and
 write the point-domain attributes `penumbra_shading` (colour, scene-linear
 RGB) and `penumbra_visibility` (float, cosine-weighted visibility = AO).
@@ -16,8 +16,8 @@ import numpy as np
 from bpy.app.handlers import persistent
 
 from .. import native
-from . import scene_data
-from .scene_data import VisibilityInputError
+from . import armature_data, mesh_data, world_lighting
+from .input_error import VisibilityInputError
 
 SHADING_ATTRIBUTE = "penumbra_shading"
 VISIBILITY_ATTRIBUTE = "penumbra_visibility"
@@ -54,22 +54,22 @@ class _Loaded:
                 f"model '{path}' was made for a mesh with {model.vertex_count} vertices; "
                 f"'{obj.name}' has {len(mesh.vertices)} (the mesh was edited since the bake, or it is another "
                 "mesh): undo the edit, or bake again")
-        if model.topology_hash != scene_data.topology_hash(mesh):
+        if model.topology_hash != mesh_data.topology_hash(mesh):
             raise _topology_changed(path, obj)
         self.counts = _mesh_counts(mesh)
-        armature = scene_data.armature_of(obj)
+        armature = armature_data.armature_of(obj)
         missing = [j for j in model.joints if j not in armature.pose.bones]
         if missing:
             raise VisibilityInputError(
                 f"model '{path}' was made for another armature: '{armature.name}' lacks {', '.join(missing[:5])}")
         self.model = model
-        sizes, loops = scene_data.polygon_topology(mesh)
+        sizes, loops = mesh_data.polygon_topology(mesh)
         # The polygons (Blender's vertex normals, computed in C++ each frame)
         # and the reference neighbours (the frames' tangents).
-        self.mesh = core.visibility.RuntimeMesh(len(mesh.vertices), sizes, loops)
+        self.mesh = core.visibility.ShadingMesh(len(mesh.vertices), sizes, loops)
         self.neighbours = core.visibility.reference_neighbours(len(mesh.vertices), sizes, loops)
         # The GPU preview's mesh reads (gpu_preview.object_inputs).
-        self.buffers = scene_data.MeshBuffers(mesh)
+        self.buffers = mesh_data.MeshBuffers(mesh)
         # Arrays reused frame after frame: the evaluated mesh's positions
         # are read into `positions`, the C++ writes the attributes' values
         # into `rgba` and `ao`, which go to Blender as they are.
@@ -121,7 +121,7 @@ def loaded_model(obj, check_topology=False):
         _models.pop(obj.name, None)
         entry = _Loaded(obj, path)
         _models[obj.name] = entry
-    elif check_topology and entry.model.topology_hash != scene_data.topology_hash(obj.data):
+    elif check_topology and entry.model.topology_hash != mesh_data.topology_hash(obj.data):
         _models.pop(obj.name, None)
         raise _topology_changed(path, obj)
     return entry
@@ -149,7 +149,7 @@ def _read_positions(obj, depsgraph, entry):
     """The evaluated mesh's object-space positions into entry.positions, and
     the object's world matrix. Blender's normals are not read: reading them
     makes Blender compute them for the pose, which costs more than the C++
-    computing the same normals (runtime_shading.hpp)."""
+    computing the same normals (frame_shading.hpp)."""
     evaluated = obj.evaluated_get(depsgraph)
     mesh = evaluated.to_mesh()
     try:
@@ -161,7 +161,7 @@ def _read_positions(obj, depsgraph, entry):
                 f"'{obj.name}' has {count} vertices after its modifiers; the model has "
                 f"{entry.model.vertex_count}: disable {', '.join(changing) or 'the modifiers that add or remove vertices'}, "
                 "or apply them and bake again")
-        scene_data._vertex_positions(mesh, entry.positions)
+        mesh_data._vertex_positions(mesh, entry.positions)
     finally:
         evaluated.to_mesh_clear()
     return np.array(evaluated.matrix_world, dtype=np.float64)
@@ -178,13 +178,13 @@ def shade_object(obj, scene, depsgraph=None, check_topology=False):
     t0 = time.perf_counter()
     entry = loaded_model(obj, check_topology)
     model = entry.model
-    armature = scene_data.armature_of(obj)
-    rotations = scene_data.bone_rotations(armature, model.joints)
+    armature = armature_data.armature_of(obj)
+    rotations = armature_data.bone_rotations(armature, model.joints)
     depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
     t_read = time.perf_counter()
     world = _read_positions(obj, depsgraph, entry)
     read_mesh = time.perf_counter() - t_read
-    lighting, _, world_warning = scene_data.world_lighting_checked(scene, model.order)
+    lighting, _, world_warning = world_lighting.world_lighting_checked(scene, model.order)
     s = obj.penumbra_visibility
     camera = np.array(scene.camera.matrix_world.translation) if scene.camera else np.zeros(3)
     t1 = time.perf_counter()
