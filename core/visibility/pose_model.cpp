@@ -16,7 +16,6 @@
 #include <Eigen/SVD>
 
 #include "common/error.hpp"
-#include "sh/brdf_operator.hpp"
 #include "common/parallel.hpp"
 #include "visibility/ridge_curve.hpp"
 #include "visibility/runtime_kernel.hpp"
@@ -120,20 +119,6 @@ double rotation_angle_between(const float* a, const float* b) {
     const Eigen::Matrix3d r = to_matrix(a).transpose() * to_matrix(b);
     const double c = std::clamp((r.trace() - 1.0) / 2.0, -1.0, 1.0);
     return std::acos(c);
-}
-
-double ambient_occlusion(int order, const double* sh) {
-    static thread_local int cached_order = 0;
-    static thread_local std::vector<double> row;
-    if (cached_order != order) {
-        const sh::ZonalOperator t = sh::diffuse_zonal_operator(order);
-        row.assign(order, 0.0);
-        for (int l = 0; l < order; ++l) row[l] = t.blocks[0](0, l);
-        cached_order = order;
-    }
-    double s = 0.0;
-    for (int l = 0; l < order; ++l) s += row[l] * sh[l * (l + 1)];
-    return std::sqrt(4.0 * std::numbers::pi) * s;
 }
 
 std::vector<JointChoice> choose_active_joints(const TrainingSet& set, const std::vector<BoneInfluence>& influence,

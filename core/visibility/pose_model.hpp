@@ -238,7 +238,4 @@ void lobes_from_params(int order, int lobes, std::size_t vertex_count, const flo
 // set's bones must include every model joint.
 Errors evaluate_pose_model(const PoseModel& model, const TrainingSet& set, int threads = 0);
 
-// The diffuse AO of an SH visibility vector: √(4π)·(T_diffuse v)_00.
-double ambient_occlusion(int order, const double* sh);
-
 }  // namespace penumbra::visibility
