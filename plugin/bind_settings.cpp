@@ -9,7 +9,7 @@
 #include "common/setting.hpp"
 #include "lights/rig.hpp"
 #include "sh/pose_shading.hpp"
-#include "visibility/pose_model.hpp"
+#include "visibility/pose_fit.hpp"
 #include "visibility/visibility_bake.hpp"
 
 namespace py = pybind11;

@@ -15,7 +15,7 @@
 #include "enums.hpp"
 #include "visibility/mesh_frames.hpp"
 #include "visibility/order_limit.hpp"
-#include "visibility/pose_model.hpp"
+#include "visibility/pose_features.hpp"
 #include "visibility/visibility_bake.hpp"
 #include "visibility/zh_fit.hpp"
 #include "visibility/zh_rows.hpp"

@@ -19,6 +19,7 @@
 #include "visibility/model_file.hpp"
 #include "visibility/model_statistics.hpp"
 #include "visibility/order_limit.hpp"
+#include "visibility/pose_fit.hpp"
 #include "visibility/pose_model.hpp"
 #include "visibility/frame_shading.hpp"
 

@@ -14,6 +14,7 @@
 #include "common/math.hpp"
 #include "common/error.hpp"
 #include "sh/basis.hpp"
+#include "sh/brdf_operator.hpp"
 #include "sh/point_sets.hpp"
 #include "visibility/order_limit.hpp"
 
@@ -321,6 +322,20 @@ void lobes_to_sh(int order, int lobes, const double* params, double* sh_out) {
         for (int l = 0; l < order; ++l)
             for (int m = -l; m <= l; ++m) sh_out[sh::sh_index(l, m)] += p[2 + l] * y[sh::sh_index(l, m)];
     }
+}
+
+double ambient_occlusion(int order, const double* sh) {
+    static thread_local int cached_order = 0;
+    static thread_local std::vector<double> row;
+    if (cached_order != order) {
+        const sh::ZonalOperator t = sh::diffuse_zonal_operator(order);
+        row.assign(order, 0.0);
+        for (int l = 0; l < order; ++l) row[l] = t.blocks[0](0, l);
+        cached_order = order;
+    }
+    double s = 0.0;
+    for (int l = 0; l < order; ++l) s += row[l] * sh[l * (l + 1)];
+    return std::sqrt(4.0 * std::numbers::pi) * s;
 }
 
 }  // namespace penumbra::visibility

@@ -57,4 +57,8 @@ double fit_zh_lobes(const ZhFitSettings& settings, const double* sh, const doubl
 // Eq. 1 for all lobes of one vertex: writes order² values (overwrites).
 void lobes_to_sh(int order, int lobes, const double* params, double* sh_out);
 
+// The diffuse AO of an SH visibility vector: √(4π)·(T_diffuse v)_00, what
+// the fit's and the model's errors are also measured in.
+double ambient_occlusion(int order, const double* sh);
+
 }  // namespace penumbra::visibility

@@ -1,7 +1,5 @@
 #include "visibility/zh_rows.hpp"
 
-#include "visibility/pose_model.hpp"
-
 namespace penumbra::visibility {
 
 void fit_zh_lobes_rows(const ZhFitSettings& settings, std::size_t count, const double* sh, const double* reference,

@@ -1,4 +1,4 @@
-// The ZH fit (zh_fit.hpp), paper Eq. 1 and the diffuse AO (pose_model.hpp)
+// The ZH fit, paper Eq. 1 and the diffuse AO (zh_fit.hpp)
 // over many vertices at once: `count` rows one after another, as numpy
 // passes them to _penumbra.visibility.fit_zh_lobes, zh_params_to_sh and
 // ambient_occlusion. Each row is computed exactly as the one-vertex

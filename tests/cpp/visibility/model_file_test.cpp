@@ -14,7 +14,7 @@
 #include "common/hash.hpp"
 #include "test_files.hpp"
 #include "visibility/model_file.hpp"
-#include "visibility/pose_model.hpp"
+#include "visibility/pose_fit.hpp"
 #include "visibility_test_util.hpp"
 
 namespace penumbra::visibility {

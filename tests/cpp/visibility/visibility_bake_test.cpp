@@ -14,8 +14,8 @@
 #include "sh/point_sets.hpp"
 #include "sh/zonal.hpp"
 #include "visibility/mesh_frames.hpp"
-#include "visibility/pose_model.hpp"
 #include "visibility/visibility_bake.hpp"
+#include "visibility/zh_fit.hpp"
 #include "visibility_test_util.hpp"
 
 namespace penumbra::visibility {

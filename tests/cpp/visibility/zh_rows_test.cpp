@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "visibility/pose_model.hpp"  // ambient_occlusion
+#include "visibility/zh_fit.hpp"
 #include "visibility/zh_rows.hpp"
 
 namespace penumbra::visibility {

@@ -1,4 +1,4 @@
-// The linear pose model (visibility/pose_model.hpp) on synthetic training
+// The pose model's fit (visibility/pose_fit.hpp) on synthetic training
 // sets whose visibility is exactly linear in the pose features.
 #include <cmath>
 #include <numbers>
@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "common/error.hpp"
-#include "visibility/pose_model.hpp"
+#include "visibility/pose_fit.hpp"
 #include "visibility_test_util.hpp"
 
 namespace penumbra::visibility {
@@ -16,7 +16,7 @@ namespace {
 
 using testing::synthetic_set;
 
-TEST(PoseModel, linear_data_is_reproduced_on_unseen_poses) {
+TEST(PoseFit, linear_data_is_reproduced_on_unseen_poses) {
     std::vector<double> angles;
     for (int f = 0; f < 16; ++f) angles.push_back(0.1 * f);
     const TrainingSet set = synthetic_set(angles, 50, 2);
@@ -49,7 +49,7 @@ TEST(PoseModel, linear_data_is_reproduced_on_unseen_poses) {
 // near 0 barely depend on it: pruning by measured contribution keeps the
 // leading direction alone (or none) there, both further on, and every
 // direction at tolerance 0.
-TEST(PoseModel, pruning_keeps_each_vertex_the_leading_joint_directions_that_matter) {
+TEST(PoseFit, pruning_keeps_each_vertex_the_leading_joint_directions_that_matter) {
     std::vector<double> angles;
     for (int f = 0; f < 16; ++f) angles.push_back(0.1 * f);
     const TrainingSet set = synthetic_set(angles, 50, 1);
@@ -85,7 +85,7 @@ TEST(PoseModel, pruning_keeps_each_vertex_the_leading_joint_directions_that_matt
     EXPECT_LT(report.model_holdout.sh_rms, full_report.model_holdout.sh_rms + 0.01);
 }
 
-TEST(PoseModel, held_out_error_is_that_of_the_pruned_model_as_stored) {
+TEST(PoseFit, held_out_error_is_that_of_the_pruned_model_as_stored) {
     std::vector<double> angles;
     for (int f = 0; f < 16; ++f) angles.push_back(0.1 * f);
     const TrainingSet set = synthetic_set(angles, 50, 1);
@@ -128,7 +128,7 @@ TEST(PoseModel, held_out_error_is_that_of_the_pruned_model_as_stored) {
                 1e-4 * report.model_holdout_unpruned.sh_rms + 2e-5);
 }
 
-TEST(PoseModel, stays_finite_with_more_columns_than_frames_repeated_frames_and_still_joints) {
+TEST(PoseFit, stays_finite_with_more_columns_than_frames_repeated_frames_and_still_joints) {
     // 3 distinct poses, repeated: far fewer frames than the 9 feature columns,
     // plus two joints that never move.
     const TrainingSet set = synthetic_set({0.0, 0.5, 1.0, 0.0, 0.5, 1.0, 1.0, 1.0}, 20, 2);
@@ -145,7 +145,7 @@ TEST(PoseModel, stays_finite_with_more_columns_than_frames_repeated_frames_and_s
     }
 }
 
-TEST(PoseModel, rigid_and_non_deforming_bones_are_dropped_with_their_reason) {
+TEST(PoseFit, rigid_and_non_deforming_bones_are_dropped_with_their_reason) {
     const TrainingSet set = synthetic_set({0.0, 0.3, 0.6, 0.9}, 5, 1);
     const auto choices = choose_active_joints(set, {{true, true}, {false, false}}, 1.0);
     EXPECT_FALSE(choices[0].active);
@@ -170,7 +170,7 @@ TrainingSet tilting_set(const std::vector<double>& angles, int vertices) {
     return set;
 }
 
-TEST(PoseModel, the_default_iterations_per_frame_fit_moving_lobes_about_as_well_as_eight) {
+TEST(PoseFit, the_default_iterations_per_frame_fit_moving_lobes_about_as_well_as_eight) {
     std::vector<double> angles;
     for (int f = 0; f < 12; ++f) angles.push_back(0.1 * f);
     const TrainingSet set = tilting_set(angles, 20);
@@ -194,7 +194,7 @@ TEST(PoseModel, the_default_iterations_per_frame_fit_moving_lobes_about_as_well_
     EXPECT_GT(none, bound);
 }
 
-TEST(PoseModel, a_vertex_whose_visibility_repeats_gets_the_fit_of_its_first_occurrence) {
+TEST(PoseFit, a_vertex_whose_visibility_repeats_gets_the_fit_of_its_first_occurrence) {
     // Poses 0, 0.5, 1.0 repeated: the repeated frames' visibility is equal
     // bit for bit to the first ones' and their fits are reused. Perturbing
     // the repeats by 1e-6 (no longer equal, so fitted anew) must change the
@@ -221,7 +221,7 @@ TEST(PoseModel, a_vertex_whose_visibility_repeats_gets_the_fit_of_its_first_occu
     EXPECT_NEAR(a_report.zh_fit.sh_rms, b_report.zh_fit.sh_rms, 1e-5);
 }
 
-TEST(PoseModel, bad_training_sets_are_argument_errors) {
+TEST(PoseFit, bad_training_sets_are_argument_errors) {
     TrainingSet set = synthetic_set({0.0, 0.3}, 5);
     set.frames[1].visibility.pop_back();
     EXPECT_THROW(fit_pose_model(set, {{true, false}}, {}), ArgumentError);
