@@ -354,7 +354,7 @@ def test_the_suns_written_have_the_cores_angle_and_carry_their_lights_flux(addon
     docs/lights.md), with the cone from 4.0 on."""
     from penumbra.lights import rig_objects
     scene = addon
-    lights = _core().lights
+    lights = core_module().lights
     spread = np.array([[0.0, 5.7e-17, 0.02, 0.3, 0.9, 3.0]])
     slots = spread.shape[1]
     rgb = np.linspace(0.5, 3.0, 3 * slots).reshape(1, slots, 3)
