@@ -251,7 +251,7 @@ VISIBILITY_FRAMES = 10
 @pytest.fixture
 def character_scene(addon, tmp_path):
     """The small character, active, and where its model goes."""
-    from visibility_scenes import character
+    from visibility_character_scenes import character
 
     def build():
         obj, rig = character(bpy.context.scene, frames=VISIBILITY_FRAMES)
