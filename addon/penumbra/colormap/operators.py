@@ -18,7 +18,7 @@ from . import filtered_ramp, footprint, noise_filter, noise_maths, noise_model, 
 from . import node_groups, ramp as ramp_io, sample_count
 from .material import BakeError, Rollback, editable_material
 from .surface_filter import filters_of
-from .. import color, modal_job, native, world
+from .. import color, modal_job, native, node_links, world
 from ..compat import socket_is
 from ..errors import describe
 
@@ -82,13 +82,13 @@ def _ramp_fingerprint(node):
     noise_settings = None
     if noise is not None:
         def linked(socket):
-            if not socket.is_linked:
-                return None
-            return socket.links[0].from_node.name, socket.links[0].from_socket.identifier
+            # The link Blender evaluates (node_links), so muting a link counts as a change.
+            link = node_links.live_link(socket)
+            return None if link is None else (link.from_node.name, link.from_socket.identifier)
         noise_settings = (noise.name, noise.bl_idname, getattr(noise, "noise_dimensions", None),
                           getattr(noise, "musgrave_dimensions", None), getattr(noise, "noise_type", None),
                           getattr(noise, "musgrave_type", None), getattr(noise, "normalize", None),
-                          tuple((i.identifier, linked(i), getattr(i, "default_value", None) if not i.is_linked and
+                          tuple((i.identifier, linked(i), getattr(i, "default_value", None) if linked(i) is None and
                                  isinstance(getattr(i, "default_value", None), float) else None)
                                 for i in noise.inputs if i.enabled))
     return (ramp_io.ramp_stops(node).tobytes(), tuple(ramp_io.ramp_modes(node)),
