@@ -64,7 +64,7 @@ def run(name, command_prefix, extra_args, timeout=None, may_select_none=False):
     extra arguments (-k ...) may leave this run nothing to run."""
     with tempfile.TemporaryDirectory() as tmp:
         junit = os.path.join(tmp, "junit.xml")
-        pytest_args = [TESTS, "-q", "-p", "no:cacheprovider", f"--junitxml={junit}", *extra_args]
+        pytest_args = [TESTS, "-q", "-p", "no:cacheprovider", "--durations=8", f"--junitxml={junit}", *extra_args]
         print(f"\n=== {name} ===", flush=True)
         returncode = run_command(command_prefix + pytest_args, timeout)
         if returncode is None:
