@@ -21,7 +21,8 @@ $(BUILD)/CMakeCache.txt:
 build: deps $(BUILD)/CMakeCache.txt
 	cmake --build $(BUILD) -j $(JOBS)
 
-# dist/penumbra-<version>-linux_x64.zip (extension) and -legacy.zip (3.x).
+# dist/penumbra-<version>-linux_x64.zip (extension), -legacy.zip (3.x) and
+# dist/repo/, an extension repository (scripts/extension_repo.py).
 package: build
 	$(VENV_PY) scripts/package.py --build $(BUILD)
 
@@ -62,7 +63,8 @@ PY_ASAN_ENV := LD_PRELOAD="$$(g++ -print-file-name=libasan.so) $$(g++ -print-fil
   UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1:suppressions=$(SUPPRESSIONS)/ubsan.supp \
   PENUMBRA_ADDON_DIR=$(abspath $(ASAN_BUILD))/addon/penumbra
 # Left out of the Python run under ASan, and why (each runs in test-python):
-#   test_package.py: checks the zips in dist/, built from the Release build;
+#   test_package.py, test_extension_repo.py: check the zips and the repository
+#     in dist/, built from the Release build;
 #   test_gpu_preview_in_blender.py, test_demo.py: run Blenders, which load the Release add-on;
 #   test_only_the_module_init_symbol_is_exported: wants all three modules,
 #     the sanitizer build makes the 3.11 one only;
@@ -73,7 +75,8 @@ PY_ASAN_ENV := LD_PRELOAD="$$(g++ -print-file-name=libasan.so) $$(g++ -print-fil
 #     no Python 3.10 module);
 #   the checks that read source files and never load the module (the
 #     architecture doc, the changelog, the import graph, function length).
-PY_ASAN_SKIP := --ignore=tests/python/test_package.py --ignore=tests/python/visibility/test_gpu_preview_in_blender.py \
+PY_ASAN_SKIP := --ignore=tests/python/test_package.py --ignore=tests/python/test_extension_repo.py \
+  --ignore=tests/python/visibility/test_gpu_preview_in_blender.py \
   --ignore=tests/python/test_demo.py --ignore=tests/python/lights/test_streaming_memory.py \
   --ignore=tests/python/colormap/test_eevee_convergence_in_blender.py \
   --ignore=tests/python/test_architecture_doc.py --ignore=tests/python/test_changelog.py \

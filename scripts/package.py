@@ -8,6 +8,13 @@
   dist/penumbra-<version>-legacy.zip      Blender 3.x Install Add-on: the same
       add-on folder with the module for Python 3.10 and 3.11, the same
       libraries and the same ffmpeg, unpacked.
+  dist/repo/                              a static extension repository for
+      Blender 4.2+: the extension zip and its index.json
+      (scripts/extension_repo.py).
+
+`--repack-as VERSION` makes no build: it repacks the zips already in dist/
+as a higher version, for the upgrade tests (scripts/extension_repo.py says
+what changes and what does not).
 
 Our wheel is packed with `wheel pack` and made self-contained with
 `auditwheel repair`, which copies every library outside the manylinux
@@ -30,6 +37,9 @@ import sys
 import tempfile
 import tomllib
 import zipfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))  # also when a test loads this file by path
+import extension_repo  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WHEEL_NAME = "penumbra_core"
@@ -192,6 +202,10 @@ def build_legacy(addon_build, version, work, dist):
     partial = target + ".part"
     with zipfile.ZipFile(partial, "w", zipfile.ZIP_DEFLATED, compresslevel=9) as z:
         for folder, _, files in os.walk(stage):
+            # Folder entries too: Blender 3.x's Install Add-on removes the
+            # old folder only when the zip names it at its root; without it
+            # the update overwrote the loaded core in place (a crash at quit).
+            z.write(folder, os.path.relpath(folder, os.path.dirname(stage)))
             for name in sorted(files):
                 path = os.path.join(folder, name)
                 z.write(path, os.path.relpath(path, os.path.dirname(stage)))
@@ -199,20 +213,49 @@ def build_legacy(addon_build, version, work, dist):
     return target
 
 
+def repack(compiled, new, source_dist, dist, repo):
+    """The zips in `source_dist` (version `compiled`) as version `new` in
+    `dist`, and `repo` serving the new extension zip."""
+    if tuple(map(int, new.split("."))) <= tuple(map(int, compiled.split("."))):
+        sys.exit(f"package: --repack-as {new} is not above the built version {compiled}")
+    os.makedirs(dist, exist_ok=True)
+    sources = [os.path.join(source_dist, f"penumbra-{compiled}-{kind}.zip") for kind in ("linux_x64", "legacy")]
+    missing = [s for s in sources if not os.path.exists(s)]
+    if missing:
+        sys.exit(f"package: nothing to repack, run `make package` first: {missing}")
+    extension = os.path.join(dist, f"penumbra-{new}-linux_x64.zip")
+    legacy = os.path.join(dist, f"penumbra-{new}-legacy.zip")
+    extension_repo.repack_extension(sources[0], compiled, new, extension)
+    extension_repo.repack_legacy(sources[1], new, legacy)
+    agreed_version(extension_repo.zip_versions(extension))
+    print(f"package: repacked {compiled}'s build as {new}; its core still says {compiled} "
+          "(_penumbra.__version__ is compiled in)")
+    return extension, legacy
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--build", default=os.path.join(ROOT, "build"))
     parser.add_argument("--dist", default=os.path.join(ROOT, "dist"))
+    parser.add_argument("--repo", help="the repository folder (default: DIST/repo)")
+    parser.add_argument("--repack-as", metavar="VERSION", help="repack dist/'s zips as this higher version")
     args = parser.parse_args()
+    repo = args.repo or os.path.join(args.dist, "repo")
     addon_build = os.path.join(args.build, "addon", "penumbra")
     version = version_of_addon(addon_build)
-    os.makedirs(args.dist, exist_ok=True)
-    for old in glob.glob(os.path.join(args.dist, "penumbra-*.zip")):
-        os.remove(old)
-    with tempfile.TemporaryDirectory(dir=args.build) as work:
-        for built in (build_extension(addon_build, version, work, args.dist),
-                      build_legacy(addon_build, version, work, args.dist)):
-            print(f"package: {os.path.relpath(built, ROOT)} ({os.path.getsize(built) / 1e6:.1f} MB)")
+    if args.repack_as:
+        made = repack(version, args.repack_as, os.path.join(ROOT, "dist"), args.dist, repo)
+    else:
+        os.makedirs(args.dist, exist_ok=True)
+        for old in glob.glob(os.path.join(args.dist, "penumbra-*.zip")):
+            os.remove(old)
+        with tempfile.TemporaryDirectory(dir=args.build) as work:
+            made = (build_extension(addon_build, version, work, args.dist),
+                    build_legacy(addon_build, version, work, args.dist))
+    listed = extension_repo.write_repository(made[0], repo)
+    for built in made:
+        print(f"package: {os.path.relpath(built, ROOT)} ({os.path.getsize(built) / 1e6:.1f} MB)")
+    print(f"package: {os.path.relpath(repo, ROOT)}/index.json lists Penumbra {listed['version']}")
 
 
 if __name__ == "__main__":

@@ -20,8 +20,8 @@ if "bpy" in locals():
     # Re-running the add-on's __init__ (F8 / script reload): reload submodules
     # so edits take effect, in dependency order.
     import importlib
-    for _name in ("native", "errors", "color", "compat", "core_settings", "world", "sidebar", "visibility", "lights",
-                  "colormap", "properties", "preferences", "panels"):
+    for _name in ("installed_copies", "native", "errors", "color", "compat", "core_settings", "world", "sidebar",
+                  "visibility", "lights", "colormap", "properties", "preferences", "panels"):
         if _name in locals():
             importlib.reload(locals()[_name])
 
@@ -30,7 +30,7 @@ import sys  # noqa: E402
 
 import bpy  # noqa: E402
 
-from . import native, color, visibility, lights, colormap, properties, preferences, panels  # noqa: E402
+from . import installed_copies, native, color, visibility, lights, colormap, properties, preferences, panels  # noqa: E402
 
 # Settings first (operators and panels refer to them), then each tool's
 # operators and handlers, then the panels that draw them.
@@ -42,6 +42,7 @@ _registered = False
 
 def register():
     global _registered
+    kept_preferences = installed_copies.take_over_other_copies(__package__)
     done = []
     try:
         for module in _modules:
@@ -54,6 +55,7 @@ def register():
             module.unregister()
         raise
     _registered = True
+    installed_copies.carry_preferences(__package__, kept_preferences)
     if _is_bpy_module():
         atexit.register(_unregister_at_exit)
 

@@ -22,6 +22,8 @@ import stat
 import sys
 import tempfile
 
+from . import installed_copies
+
 module = None       # the loaded _penumbra, or None
 load_error = None   # why it could not be loaded, for the panel
 
@@ -37,6 +39,7 @@ def _import_module():
 
 def _load():
     global module, load_error
+    loaded_before = "_penumbra" in sys.modules  # by an earlier copy or version of the add-on
     try:
         module = _import_module()
     except ImportError as error:  # missing build, wrong Python, missing library
@@ -46,6 +49,12 @@ def _load():
             f"this Blender runs Python {sys.version_info.major}.{sys.version_info.minor}."
         )
         return
+    stale = installed_copies.stale_core_reason(module) if loaded_before else None
+    if stale:  # an update replaced it while Blender ran: never call into it
+        module, load_error = None, stale
+        print(f"Penumbra: {stale}", file=sys.stderr)
+        return
+    installed_copies.remember_loaded_file(module)
     sys.modules["_penumbra"] = module
     ffmpeg = bundled_ffmpeg()
     if ffmpeg:

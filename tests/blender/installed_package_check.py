@@ -124,4 +124,5 @@ def main():
     print("RESULT " + json.dumps(report), flush=True)
 
 
-main()
+if __name__ == "__main__":  # extension_repo_steps.py imports the tool runs
+    main()
