@@ -7,12 +7,15 @@ mode runs every step of the full demo with smaller pictures and fewer
 samples, so the full run prints the same lines (the line count depends on
 the steps, not the sizes)."""
 
+import glob
 import json
 import os
 import subprocess
 import sys
 
 import pytest
+
+from tests import rig_json_schema
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 DEMO = os.path.join(ROOT, "examples", "demo.py")
@@ -66,6 +69,16 @@ def test_demo_writes_a_wide_contact_sheet_per_tool_and_the_panel_screenshot(quic
             path = os.path.join(out, name, f"{tool}-sheet.png")
             assert _penumbra.image.read_info(path)["width"] >= 1200, path
     assert os.path.exists(os.path.join(out, "panel.png"))
+
+
+def test_the_demos_rig_files_follow_the_documented_schema(quick_demo):
+    out, _, _ = quick_demo
+    for name in BLENDERS:
+        paths = sorted(glob.glob(os.path.join(out, name, "*", "rig_*.json")))
+        assert [os.path.basename(p) for p in paths] == ["rig_animated.json", "rig_static.json"], name
+        for path in paths:
+            with open(path) as f:
+                rig_json_schema.validate(json.load(f))
 
 
 def test_demo_errors_say_what_the_readme_says(quick_demo):
