@@ -20,9 +20,10 @@ and fitted as the operator does, its frame change against Blender's own
 Writes docs/visibility-humanoid-benchmark.md,
 docs/visibility/humanoid-benchmark.json and docs/visibility/humanoid-fit-cost.svg.
 
-    .venv/bin/python bench/visibility_humanoid_benchmark.py [--quick | --frame-change]
+    .venv/bin/python bench/visibility_humanoid_benchmark.py [--quick | --frame-change | --held-out-frames]
 
 --frame-change: only the ~100k-vertex run-time section, rewritten in place.
+--held-out-frames: only the per-frame held-out error of both splits, rewritten in place.
 """
 
 import json
@@ -50,6 +51,8 @@ from bench.helpers.visibility_training import baked_sh, bake_frames, model_sh  #
 
 QUICK = "--quick" in sys.argv
 FRAME_CHANGE_ONLY = "--frame-change" in sys.argv
+HELD_OUT_FRAMES_ONLY = "--held-out-frames" in sys.argv
+HELD_OUT_FRAMES_SECTION = "## Every held-out frame"
 # The run time at production scale: ~100k vertices (2.5k with --quick).
 FRAME_CHANGE_DETAIL = 0.25 if QUICK else 10.0
 FRAME_CHANGE_SECTION = "## Frame change at production scale"
@@ -68,6 +71,9 @@ FEATURE_TOLERANCES = [0.0, 0.01, 0.03, 0.1]
 ROUNDS = 2 if QUICK else 3
 CASTING_FRAMES = 4 if QUICK else 8
 CASTING_MODES = ["single:robust", "single", "coherent", "coherent:same"]
+# Issue #27 item 7: every held-out frame within GOAL of its per-frame bake,
+# for frames interleaved with training and for a contiguous block after it.
+SPLITS = {"every 4th frame": HELD_OUT, f"the last {FRAMES // 4} frames": list(range(FRAMES - FRAMES // 4 + 1, FRAMES + 1))}
 
 
 def new_humanoid(detail=DETAIL, frames=FRAMES):
@@ -144,6 +150,98 @@ def accuracy(core, obj, influence, results):
     }
     log("accuracy:", {k: v for k, v in results["accuracy"].items() if k not in ("active_joints", "rounds")})
     return training, held_out, cycles_held
+
+
+def held_out_frames(core, obj, influence):
+    """Per split (SPLITS): the model fitted on the other frames (every choice
+    made by the fit on those alone) against Cycles on each held-out frame,
+    over the per-frame bake's error on that frame, with the pose-ignoring
+    model's beside it. One bake of every frame, Cycles once per held-out frame."""
+    everything = bake_frames(obj, list(range(1, FRAMES + 1)), RAYS, ORDER).training
+    numbers = [int(f) for f in everything.frame_numbers]
+    cycles_frames = sorted(set().union(*SPLITS.values()))
+    cycles_all, _ = cycles_ao(obj, cycles_frames, CYCLES_SAMPLES)
+    out = []
+    for name, held in SPLITS.items():
+        training = everything.subset([i for i, f in enumerate(numbers) if f not in held])
+        held_set = everything.subset([i for i, f in enumerate(numbers) if f in held])
+        model, report, seconds = fit(core, training, influence)
+        reference = cycles_all[:, [cycles_frames.index(f) for f in held]]
+        truth, mean = frame_ao(core, baked_sh(held_set)), frame_ao(core, baked_sh(training).mean(axis=0)[None])
+        model_error = np.abs(frame_ao(core, model_sh(model, held_set)) - reference).mean(axis=0)
+        bake_error = np.abs(truth - reference).mean(axis=0)
+        ignoring_error = np.abs(mean - reference).mean(axis=0)
+        ratios = model_error / bake_error
+        # How new each held-out pose is: its largest joint angle from the
+        # nearest training pose (over the model's joints).
+        joints = [everything.bone_names.index(j) for j in model.joints]
+        rotations = np.stack([everything.bone_rotations(i)[joints] for i in range(len(everything))])
+        train_rows = [i for i, f in enumerate(numbers) if f not in held]
+        novelty = []
+        for f in held:
+            cos = (np.einsum("tjik,jik->tj", rotations[train_rows], rotations[numbers.index(f)]) - 1) / 2
+            novelty.append(float(np.degrees(np.arccos(np.clip(cos, -1, 1))).max(axis=1).min()))
+        out.append({"split": name, "frames": held, "training_frames": len(training),
+                    "ratios": ratios.tolist(), "novelty_degrees": novelty, "pose_ignoring_ratios": (ignoring_error / bake_error).tolist(),
+                    "mean_ratio": float(model_error.mean() / bake_error.mean()), "worst_ratio": float(ratios.max()),
+                    "worst_frame": held[int(ratios.argmax())], "ridge_relative": report["ridge_relative"],
+                    "bytes_per_vertex": report["model_bytes"] / training.vertex_count, "fit_seconds": seconds})
+        log("held-out frames:", out[-1])
+    return out
+
+
+def held_out_frames_lines(rows, alone=False):
+    """The "Every held-out frame" section (`alone`: written by --held-out-frames)."""
+    lines = [HELD_OUT_FRAMES_SECTION, "",
+             "Issue #27 item 7. Per held-out frame: the model's mean |ΔAO| against Cycles over the per-frame bake's "
+             "on that frame (the floor); goal: every frame within "
+             f"{GOAL:g}×. Two splits of the {FRAMES} frames: the one above (every 4th frame held out, between "
+             "training frames) and a contiguous block after the training frames (new motion). Every choice of "
+             "the fit (active joints, feature directions, ridge, pruning, constants) is made on the training "
+             "frames alone (the ridge on every 4th of them). `mean` is the mean error over the frames' mean; the "
+             "pose-ignoring model (the training frames' mean) is the ceiling. Per frame, in brackets: how new the "
+             "pose is, its largest joint angle from the nearest training pose. Run alone: `.venv/bin/python "
+             "bench/visibility_humanoid_benchmark.py --held-out-frames`."
+             + (" This section was rewritten alone: the others are from the last full run, before the fit pruned "
+                "the stored model on its own weights (CHANGELOG)." if alone else ""), "",
+             "| held out | training frames | mean | worst frame | worst | frames past the goal | pose-ignoring: mean of frames | ρ | bytes / vertex | goal |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
+    for x in rows:
+        past = sum(r > GOAL for r in x["ratios"])
+        lines.append(f"| {x['split']} | {x['training_frames']} | {x['mean_ratio']:.2f} | {x['worst_frame']} | "
+                     f"{x['worst_ratio']:.2f} | {past} of {len(x['ratios'])} | "
+                     f"{float(np.mean(x['pose_ignoring_ratios'])):.2f} | {x['ridge_relative']:.2g} | "
+                     f"{x['bytes_per_vertex']:.0f} | {verdict(x['worst_ratio'] <= GOAL)} |")
+    lines.append("")
+    for x in rows:
+        lines.append(f"Per frame, {x['split']}: " + ", ".join(
+            f"{f} {r:.2f} ({a:.0f}°)" for f, r, a in zip(x["frames"], x["ratios"], x["novelty_degrees"])) + ".")
+        lines.append("")
+    lines += ["What was tried, outside this benchmark on the same bake (2026-11-29, numbers as worst frame, every "
+              "4th / last 16): the ridge forced from ρ = 1e-5 to 0.3 (best 1.69 at the chosen 0.0018 / 2.82 at "
+              "0.01; a larger ρ raises every frame of the interleaved split); a ridge per vertex chosen by its "
+              "own error on every 4th training frame (1.66 / 3.22); rotation vectors instead of R − I (1.76 / "
+              "3.13); feature tolerance 0.3 (1.74 / 2.97); joint tolerance 10° (1.69 / 2.88); no pruning "
+              "(1.66 / 3.11); pruning tolerance 0.03 (2.02 / 2.96); axis prior 0.1 and 10 (1.78 / 2.91, "
+              "1.69 / 2.90); 3 lobes (1.74 / 2.85). None meets the goal. The lobes are not the limit: fitted on "
+              "the held-out frames themselves (in sample) the model is within 1.02× of the per-frame bake on "
+              "every frame of both splits. Even a ridge per vertex chosen on the held-out frames (an oracle the "
+              "fit may not use) leaves the last 16 frames at 2.59. In the last 16 frames the error grows with how far the held-out "
+              "pose is from every training pose, as a linear model's extrapolation does.", ""]
+    return lines
+
+
+def run_held_out_frames_only():
+    """--held-out-frames: only that section, rewritten in place (and in the JSON)."""
+    penumbra.register()
+    core = native.require()
+    obj, rig, _ = new_humanoid()
+    rows = held_out_frames(core, obj, armature_data.bone_influence(obj, rig))
+    penumbra.unregister()
+    doc_section.write_section(os.path.join(DOCS, "visibility-humanoid-benchmark.md"), HELD_OUT_FRAMES_SECTION,
+                              "\n".join(held_out_frames_lines(rows, alone=True)), after="## Held-out frames against Cycles")
+    doc_section.update_json(os.path.join(DOCS, "visibility", "humanoid-benchmark.json"), "held_out_frames", rows)
+    log("wrote the held-out frames section")
 
 
 def casting(obj, results):
@@ -244,6 +342,7 @@ def main():
         f"{len(TRAIN)} training + {len(HELD_OUT)} held-out frames")
     influence = armature_data.bone_influence(obj, rig)
     training, held_out, cycles_held = accuracy(core, obj, influence, results)
+    results["held_out_frames"] = held_out_frames(core, obj, influence)
     casting(obj, results)
     fit_cost(core, training, influence, results["accuracy"]["active_joints"], results)
     size_against_error(core, training, held_out, cycles_held, influence, results)
@@ -359,6 +458,7 @@ def write_markdown(r):
              f"Mean Cycles AO {a['mean_cycles_ao']:.3f}.", "",
              f"Held-out error / per-frame bake's: **{a['ratio_model_over_per_frame']:.2f}** (goal ≤ {GOAL:g}: "
              f"{verdict(a['ratio_model_over_per_frame'] <= GOAL)}).", "",
+             *held_out_frames_lines(r["held_out_frames"]),
              "## Bake + fit against Cycles' time", ""] + timing_lines(r) + casting_lines(r)
     lines += fit_cost_lines(r) + size_lines(r) + [""] + frame_change_lines(r)
     path = os.path.join(DOCS, "visibility-humanoid-benchmark.md")
@@ -454,4 +554,9 @@ def size_lines(r):
 
 
 if __name__ == "__main__":
-    run_frame_change_only() if FRAME_CHANGE_ONLY else main()
+    if FRAME_CHANGE_ONLY:
+        run_frame_change_only()
+    elif HELD_OUT_FRAMES_ONLY:
+        run_held_out_frames_only()
+    else:
+        main()

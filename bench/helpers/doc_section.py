@@ -1,9 +1,11 @@
-"""Replacing a benchmark's section of a page in docs/ (written to a
-temporary name, then renamed), and the optional lock that keeps two timed
+"""Replacing a benchmark's section of a page in docs/ and its key in the
+benchmark's JSON (written to a temporary name, then renamed), and the
+optional lock that keeps two timed
 benchmarks from running at once on a shared machine."""
 
 import contextlib
 import fcntl
+import json
 import os
 
 
@@ -28,6 +30,20 @@ def write_section(path, marker, section, after=None):
     text = open(path).read() if os.path.exists(path) else ""
     with open(path + ".tmp", "w") as f:
         f.write(replace_section(text, marker, section, after))
+    os.replace(path + ".tmp", path)
+
+
+def update_json(path, key, value):
+    """Sets `key` of the JSON object in the file at `path` (a new one when
+    absent), written atomically: a section rewritten alone keeps its
+    benchmark's other results."""
+    stored = {}
+    if os.path.exists(path):
+        with open(path) as f:
+            stored = json.load(f)
+    stored[key] = value
+    with open(path + ".tmp", "w") as f:
+        json.dump(stored, f, indent=1)
     os.replace(path + ".tmp", path)
 
 
