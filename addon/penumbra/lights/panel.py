@@ -79,6 +79,7 @@ class PENUMBRA_PT_light_rig_output(_SubPanel, bpy.types.Panel):
     def draw(self, context):
         layout = _split(self.layout)
         s = context.scene.penumbra.light_rig
+        layout.prop(s, "target_renderer", text="Renderer")
         layout.prop(s, "json_path")
         layout.column(heading="Shadows").prop(s, "limit_shadows", text="8 Strongest")
         if bpy.app.version < (4, 2, 0):

@@ -24,10 +24,20 @@ COLLECTION_NAME = "Penumbra Light Rig"
 LINEAR = 1  # FCurve keyframe interpolation enum value of 'LINEAR'
 
 
-def sun_model(version=None):
-    """The _penumbra.lights.SunModel this Blender's Cycles (or `version`'s) draws suns with."""
+def sun_model(version=None, eevee=False, shadow=True):
+    """The _penumbra.lights.SunModel this Blender's (or `version`'s) Cycles, or
+    its EEVEE when `eevee`, draws a sun with (casting a shadow or not)."""
     major, minor = tuple(bpy.app.version if version is None else version)[:2]
-    return native.require().lights.sun_model_for_blender(major, minor)
+    return native.require().lights.sun_model_for_renderer(major, minor, eevee, shadow)
+
+
+def targets_eevee(target_renderer, scene):
+    """Whether a rig for `target_renderer` (settings.TARGET_RENDERER_ITEMS) is
+    drawn by EEVEE: SCENE follows the scene's engine (BLENDER_EEVEE, or
+    BLENDER_EEVEE_NEXT in 4.2-4.5)."""
+    if target_renderer == "SCENE":
+        return scene.render.engine.startswith("BLENDER_EEVEE")
+    return target_renderer == "EEVEE"
 
 
 def sun_quaternions(directions):
@@ -89,7 +99,7 @@ def shadowed_indices(mean_power, limit=8):
 class _Values:
     """Everything the suns get, computed and checked before the .blend is touched."""
 
-    def __init__(self, rig, frame_start, limit_shadows):
+    def __init__(self, rig, frame_start, limit_shadows, eevee=False):
         self.slots = int(rig["slots"])
         rgb = np.asarray(rig["rgb"], dtype=float)              # (F, S, 3)
         directions = np.asarray(rig["directions"], dtype=float)
@@ -107,9 +117,13 @@ class _Values:
         self.colour = np.where(peak[..., None] > 0, rgb / np.maximum(peak[..., None], 1e-30), 1.0)
         lights = native.require().lights
         self.angle = lights.sun_angle(spread)
-        self.strength = peak * lights.sun_strength_per_flux(self.angle, sun_model())
         strongest = shadowed_indices(power.mean(axis=0))
         self.shadow = [(k in strongest) if limit_shadows else True for k in range(self.slots)]
+        # EEVEE Legacy gives a sun another power per strength than Cycles does;
+        # EEVEE Next the same, shadowed or not (docs/lights.md, "Suns in EEVEE").
+        per_flux = np.stack([lights.sun_strength_per_flux(self.angle[:, k], sun_model(eevee=eevee, shadow=self.shadow[k]))
+                             for k in range(self.slots)], axis=1)
+        self.strength = peak * per_flux
         self.quats = [sun_quaternions(directions[:, k]) for k in range(self.slots)]
         self.frames = np.arange(self.n_frames, dtype=float) + frame_start
 
@@ -202,14 +216,14 @@ class _Snapshot:
                 children.unlink(self.collection)
 
 
-def write_rig(scene, settings, rig, frame_start, limit_shadows):
+def write_rig(scene, settings, rig, frame_start, limit_shadows, eevee=False):
     """Creates or updates the collection, root and suns from `rig` (the dict of
     _penumbra.lights.RigBuilder.finish) with keyframes from frame_start.
 
     All or nothing: the values are computed and checked first; if anything
     fails while the .blend is being changed, what was created is removed and
     what was changed is put back before the error propagates."""
-    values = _Values(rig, frame_start, limit_shadows)
+    values = _Values(rig, frame_start, limit_shadows, eevee)
     snapshot = _Snapshot(scene, settings)
     try:
         coll = settings.collection

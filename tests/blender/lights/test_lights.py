@@ -525,7 +525,7 @@ def test_fit_irradiance_makes_the_suns_as_drawn_closer_to_the_maps_irradiance(ad
     model = "BLENDER4_CONE" if bpy.app.version >= (4, 0, 0) else "BLENDER3_DISC"
     errors = {}
     for fit in (False, True):
-        assert bpy.ops.penumbra.build_light_rig(filepath=path, count=16, fit_irradiance=fit,
+        assert bpy.ops.penumbra.build_light_rig(filepath=path, count=16, fit_irradiance=fit, target_renderer="CYCLES",
                                                 json_path=str(tmp_path / f"{fit}.json")) == {"FINISHED"}
         suns = [o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"]
         d = np.array([(o.matrix_world.to_3x3() @ mathutils.Vector((0, 0, 1))).normalized() for o in suns])
