@@ -15,7 +15,6 @@ import sys
 import time
 
 import bpy
-import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))  # bench.helpers
 from bench.helpers.paths import use_addon  # noqa: E402
@@ -24,25 +23,10 @@ use_addon()
 import penumbra  # noqa: E402
 from bench.helpers.lights_render_scene import sunrise_sphere_scene  # noqa: E402
 
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from lights_single_sun import eevee_engine, mean_of_render  # noqa: E402  (the measurement's render)
+
 COUNTS = (16, 32, 64)
-
-
-def eevee_engine():
-    return "BLENDER_EEVEE_NEXT" if (4, 2, 0) <= bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"
-
-
-def mean_luminance(scene, engine, out):
-    scene.render.engine = engine
-    bpy.ops.render.render()
-    path = os.path.join(out, "r.exr")
-    s = scene.render.image_settings
-    s.file_format, s.color_depth = "OPEN_EXR", "32"
-    bpy.data.images["Render Result"].save_render(path)
-    image = bpy.data.images.load(path)
-    px = np.array(image.pixels[:], dtype=np.float64).reshape(-1, 4)
-    bpy.data.images.remove(image)
-    return float(np.mean(px[:, :3] @ LUMINANCE))
 
 
 def main(out):
@@ -53,9 +37,9 @@ def main(out):
     scene, strength = sunrise_sphere_scene(256, 16)
     scene.render.resolution_x, scene.render.resolution_y = 48, 36
     started = time.time()
-    truth = mean_luminance(scene, "CYCLES", out)
+    truth = mean_of_render(scene, "CYCLES", out)
     scene.cycles.max_bounces = 0
-    direct = mean_luminance(scene, "CYCLES", out)
+    direct = mean_of_render(scene, "CYCLES", out)
     scene.cycles.max_bounces = 12
     result = {"blender": bpy.app.version_string, "cycles no bounces": direct / truth}
     for n, target in [(n, "EEVEE") for n in COUNTS] + [(32, "CYCLES")]:
@@ -64,7 +48,7 @@ def main(out):
                                              json_path=os.path.join(out, "rig.json"))
         assert r == {"FINISHED"}, r
         strength.default_value = 0.0
-        result[f"{n} for {target}"] = mean_luminance(scene, eevee_engine(), out) / truth
+        result[f"{n} for {target}"] = mean_of_render(scene, eevee_engine(), out) / truth
         print(result, flush=True)
     result["seconds"] = time.time() - started
     print("RESULT " + json.dumps(result), flush=True)
