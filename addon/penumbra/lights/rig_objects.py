@@ -90,7 +90,20 @@ def _set_keys(id_block, path, index, frames, values):
     fc.update()
 
 
-def shadowed_indices(mean_power, limit=8):
+# EEVEE Legacy's cascaded shadow maps go to at most this many suns; the
+# alias limit_shadows is a shadow budget of this many.
+LEGACY_SHADOWED_SUNS = 8
+
+
+def shadow_budget_of(shadow_budget, limit_shadows):
+    """The suns that may cast a shadow (0: every sun): `shadow_budget`, or
+    LEGACY_SHADOWED_SUNS when only the alias limit_shadows asks for a limit."""
+    if shadow_budget > 0:
+        return int(shadow_budget)
+    return LEGACY_SHADOWED_SUNS if limit_shadows else 0
+
+
+def shadowed_indices(mean_power, limit=LEGACY_SHADOWED_SUNS):
     """Indices of the `limit` strongest lights by mean power (ties: lower index)."""
     order = np.argsort(-np.asarray(mean_power, dtype=float), kind="stable")
     return set(int(k) for k in order[:limit])
@@ -99,7 +112,7 @@ def shadowed_indices(mean_power, limit=8):
 class _Values:
     """Everything the suns get, computed and checked before the .blend is touched."""
 
-    def __init__(self, rig, frame_start, limit_shadows, eevee=False):
+    def __init__(self, rig, frame_start, budget, eevee=False):
         self.slots = int(rig["slots"])
         rgb = np.asarray(rig["rgb"], dtype=float)              # (F, S, 3)
         directions = np.asarray(rig["directions"], dtype=float)
@@ -117,8 +130,8 @@ class _Values:
         self.colour = np.where(peak[..., None] > 0, rgb / np.maximum(peak[..., None], 1e-30), 1.0)
         lights = native.require().lights
         self.angle = lights.sun_angle(spread)
-        strongest = shadowed_indices(power.mean(axis=0))
-        self.shadow = [(k in strongest) if limit_shadows else True for k in range(self.slots)]
+        strongest = shadowed_indices(power.mean(axis=0), budget)
+        self.shadow = [(k in strongest) if budget > 0 else True for k in range(self.slots)]
         # EEVEE Legacy gives a sun another power per strength than Cycles does;
         # EEVEE Next the same, shadowed or not (docs/lights.md, "Suns in EEVEE").
         per_flux = np.stack([lights.sun_strength_per_flux(self.angle[:, k], sun_model(eevee=eevee, shadow=self.shadow[k]))
@@ -216,14 +229,16 @@ class _Snapshot:
                 children.unlink(self.collection)
 
 
-def write_rig(scene, settings, rig, frame_start, limit_shadows, eevee=False):
+def write_rig(scene, settings, rig, frame_start, limit_shadows, eevee=False, shadow_budget=0):
     """Creates or updates the collection, root and suns from `rig` (the dict of
-    _penumbra.lights.RigBuilder.finish) with keyframes from frame_start.
+    _penumbra.lights.RigBuilder.finish) with keyframes from frame_start;
+    only the `shadow_budget` strongest suns cast a shadow (0: every sun;
+    limit_shadows, its alias, is a budget of 8).
 
     All or nothing: the values are computed and checked first; if anything
     fails while the .blend is being changed, what was created is removed and
     what was changed is put back before the error propagates."""
-    values = _Values(rig, frame_start, limit_shadows, eevee)
+    values = _Values(rig, frame_start, shadow_budget_of(shadow_budget, limit_shadows), eevee)
     snapshot = _Snapshot(scene, settings)
     try:
         coll = settings.collection

@@ -71,6 +71,10 @@ class LightRigSceneSettings(bpy.types.PropertyGroup):
     limit_shadows: bpy.props.BoolProperty(
         name="Shadows for 8 Strongest", default=False,
         description="Only the 8 strongest suns cast shadows (EEVEE Legacy's limit)")
+    shadow_budget: bpy.props.IntProperty(
+        name="Shadow Budget", default=0, min=0,
+        description="Only this many strongest suns cast shadows (0: every sun; Shadows for 8 Strongest is a "
+                    "budget of 8)")
     target_renderer: bpy.props.EnumProperty(
         name="Target Renderer", items=TARGET_RENDERER_ITEMS, default="SCENE",
         description="The renderer the suns are fitted for (docs/lights.md, \"Suns in EEVEE\")")

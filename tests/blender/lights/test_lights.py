@@ -510,6 +510,13 @@ def test_shadow_limit_gives_shadows_to_the_eight_strongest(addon, tmp_path):
     assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, limit_shadows=False,
                                             json_path=json_path) == {"FINISHED"}
     assert all(o.data.use_shadow for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT")
+    # The named budget: its own count, and limit_shadows is a budget of 8.
+    assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, shadow_budget=3,
+                                            json_path=json_path) == {"FINISHED"}
+    suns = {int(o[INDEX_KEY]): o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"}
+    doc = json.load(open(json_path))
+    power = np.mean([[np.dot(l["rgb"], y) for l in f["lights"]] for f in doc["frames"]], axis=0)
+    assert sorted(k for k, o in suns.items() if o.data.use_shadow) == sorted(np.argsort(-power)[:3].tolist())
 
 
 def test_fit_irradiance_makes_the_suns_as_drawn_closer_to_the_maps_irradiance(addon, tmp_path):
