@@ -22,9 +22,7 @@ from bench.helpers.paths import use_addon  # noqa: E402
 use_addon()
 import penumbra  # noqa: E402
 from bench.helpers.lights_render_scene import sunrise_sphere_scene  # noqa: E402
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from lights_single_sun import eevee_engine, mean_of_render  # noqa: E402  (the measurement's render)
+from bench.helpers.lights_eevee import eevee_engine, mean_luminance  # noqa: E402
 
 COUNTS = (16, 32, 64)
 
@@ -37,9 +35,9 @@ def main(out):
     scene, strength = sunrise_sphere_scene(256, 16)
     scene.render.resolution_x, scene.render.resolution_y = 48, 36
     started = time.time()
-    truth = mean_of_render(scene, "CYCLES", out)
+    truth = mean_luminance(scene, "CYCLES", out)
     scene.cycles.max_bounces = 0
-    direct = mean_of_render(scene, "CYCLES", out)
+    direct = mean_luminance(scene, "CYCLES", out)
     scene.cycles.max_bounces = 12
     result = {"blender": bpy.app.version_string, "cycles no bounces": direct / truth}
     for n, target in [(n, "EEVEE") for n in COUNTS] + [(32, "CYCLES")]:
@@ -48,7 +46,7 @@ def main(out):
                                              json_path=os.path.join(out, "rig.json"))
         assert r == {"FINISHED"}, r
         strength.default_value = 0.0
-        result[f"{n} for {target}"] = mean_of_render(scene, eevee_engine(), out) / truth
+        result[f"{n} for {target}"] = mean_luminance(scene, eevee_engine(), out) / truth
         print(result, flush=True)
     result["seconds"] = time.time() - started
     print("RESULT " + json.dumps(result), flush=True)
