@@ -30,7 +30,7 @@ def _sun_rgb(ob):
     """∫L dω a sun carries. Blender 4.x Cycles: a uniform cone of half-angle
     h whose facing irradiance is the strength, so ∫L dω = strength·2/(1+cos h);
     3.x: a disc whose ∫L dω is the strength (checked by the render tests
-    below against Cycles itself)."""
+    below against Cycles itself). For a rig built for Cycles (target_renderer)."""
     rgb = np.array(ob.data.color) * ob.data.energy
     if bpy.app.version >= (4, 0, 0):
         rgb = rgb * 2.0 / (1.0 + math.cos(ob.data.angle / 2))
@@ -51,6 +51,7 @@ def _rig_irradiance(scene, normals):
 
 def test_rig_reproduces_the_maps_irradiance_and_is_updated_not_duplicated(addon, tmp_path):
     scene = addon
+    scene.render.engine = "CYCLES"  # the rig as Cycles draws it (target_renderer follows the engine)
     img = sky_and_sun()
     path = write_map(str(tmp_path / "map.exr"), img)
     json_path = str(tmp_path / "rig.json")
@@ -127,6 +128,7 @@ def test_rig_colours_are_in_the_files_working_space(addon, tmp_path):
     so a rig built in an ACEScg file holds the same light in ACEScg."""
     from penumbra import color
     scene = addon
+    scene.render.engine = "CYCLES"  # the rig as Cycles draws it (target_renderer follows the engine)
     config = color.blender_config()
     img = sky_and_sun()
     img[..., 0] *= 0.6  # a colour that differs between the spaces
