@@ -134,8 +134,9 @@ class _Values:
         self.shadow = [(k in strongest) if budget > 0 else True for k in range(self.slots)]
         # EEVEE Legacy gives a sun another power per strength than Cycles does;
         # EEVEE Next the same, shadowed or not (docs/lights.md, "Suns in EEVEE").
-        per_flux = np.stack([lights.sun_strength_per_flux(self.angle[:, k], sun_model(eevee=eevee, shadow=self.shadow[k]))
-                             for k in range(self.slots)], axis=1)
+        models = [sun_model(eevee=eevee, shadow=self.shadow[k]) for k in range(self.slots)]
+        per_flux = np.stack([lights.sun_strength_per_flux(self.angle[:, k], models[k]) for k in range(self.slots)],
+                            axis=1)
         self.strength = peak * per_flux
         self.quats = [sun_quaternions(directions[:, k]) for k in range(self.slots)]
         self.frames = np.arange(self.n_frames, dtype=float) + frame_start

@@ -53,8 +53,10 @@ TEST(LightsSunEevee, shadowed_eevee_next_sun_is_the_cone_times_what_its_shadow_k
         EXPECT_LT(sun_kernel(0.5, h, SunModel::eevee_next_shadowed), 0.9 * sun_kernel(0.5, h, SunModel::blender4_cone));
     }
     // Outside the band nothing is cut, and the strength is the cone's.
-    EXPECT_NEAR(sun_kernel(0.9, 0.3, SunModel::eevee_next_shadowed), sun_kernel(0.9, 0.3, SunModel::blender4_cone), 1e-12);
-    EXPECT_EQ(sun_strength_per_flux(1.0, SunModel::eevee_next_shadowed), sun_strength_per_flux(1.0, SunModel::blender4_cone));
+    EXPECT_NEAR(sun_kernel(0.9, 0.3, SunModel::eevee_next_shadowed), sun_kernel(0.9, 0.3, SunModel::blender4_cone),
+                1e-12);
+    EXPECT_EQ(sun_strength_per_flux(1.0, SunModel::eevee_next_shadowed),
+              sun_strength_per_flux(1.0, SunModel::blender4_cone));
 }
 
 TEST(LightsSunEevee, legacy_strength_carries_the_flux_at_eevee_legacys_radiance) {
