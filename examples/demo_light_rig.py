@@ -74,7 +74,7 @@ def _static_rig(scene, world, out_folder, settings, demo):
     """64 suns from the World; renders with the World and with the rig."""
     started = time.perf_counter()
     json_static = os.path.join(out_folder, "rig_static.json")
-    bpy.ops.penumbra.build_light_rig(filepath="", count=LIGHTS, json_path=json_static)
+    bpy.ops.penumbra.build_light_rig(filepath="", count=LIGHTS, target_renderer="CYCLES", json_path=json_static)
     build_seconds = time.perf_counter() - started
     rig = scene.penumbra.light_rig
     suns = [o for o in rig.collection.objects if o.type == "LIGHT"]
@@ -134,7 +134,7 @@ def _animated_rig(scene, hdri, out_folder, settings, demo):
     json_anim = os.path.join(out_folder, "rig_animated.json")
     lights = settings["sequence_lights"]
     bpy.ops.penumbra.build_light_rig(filepath=os.path.join(seq, "sunrise_0001.exr"), count=lights,
-                                     frame_start=1, frame_end=frames, json_path=json_anim)
+                                     frame_start=1, frame_end=frames, target_renderer="CYCLES", json_path=json_anim)
     seconds = time.perf_counter() - started
     demo.step("animated rig", f"{os.path.basename(json_anim)}: {lights} suns × {frames} frames", "", seconds)
     return {"json": json_anim, "frames": frames, "suns": lights, "report": scene.penumbra.light_rig.last_report,

@@ -113,9 +113,12 @@ void bind_enums(py::module_& m) {
         "and refitted, identities kept) or RESAMPLE (the paper's: light k = point k through each frame's CDF).");
     bind_enum<SunModel>(m, "SunModel", "sun_model",
         {{"POINT", SunModel::point}, {"BLENDER3_DISC", SunModel::blender3_disc},
-         {"BLENDER4_CONE", SunModel::blender4_cone}},
-        "How Cycles spreads a sun's flux over its angle (core/lights/sun_irradiance.hpp): BLENDER3_DISC "
-        "(Blender 3.x), BLENDER4_CONE (4.0 and later), POINT (angle 0).");
+         {"BLENDER4_CONE", SunModel::blender4_cone}, {"EEVEE_NEXT_SHADOWED", SunModel::eevee_next_shadowed},
+         {"EEVEE_LEGACY", SunModel::eevee_legacy}},
+        "How a renderer spreads a sun's flux over its angle (core/lights/sun_irradiance.hpp): BLENDER3_DISC "
+        "(Cycles in Blender 3.x), BLENDER4_CONE (Cycles 4.0 and later), EEVEE_NEXT_SHADOWED (EEVEE Next's "
+        "shadowed sun: the cone, its shadow cut at the receiver's horizon), EEVEE_LEGACY (3.x: the cone, "
+        "another power), POINT (angle 0).");
 }
 
 py::dict read_map(const std::string& path, Projection mapping, int max_width, py::object config,
@@ -291,6 +294,15 @@ void bind_suns(py::module_& m) {
     m.attr("MIN_SUN_ANGLE") = min_sun_angle;
     m.def("sun_model_for_blender", &sun_model_for_blender, py::arg("major"), py::arg("minor"),
           "The SunModel Cycles draws suns with in Blender major.minor (BLENDER4_CONE from 4.0 on).");
+    m.def("sun_model_for_renderer", &sun_model_for_renderer, py::arg("major"), py::arg("minor"),
+          py::arg("eevee"), py::arg("shadow"),
+          "The SunModel a target renderer draws a sun with: Cycles (eevee False) as sun_model_for_blender; "
+          "EEVEE_LEGACY before 4.2; EEVEE Next: EEVEE_NEXT_SHADOWED for a sun casting a shadow, else BLENDER4_CONE.");
+    m.def("cone_fraction_above_horizon", [](const Doubles& c, double half_angle) {
+        return map_elements(c, [half_angle](double v) { return cone_fraction_above_horizon(v, half_angle); });
+    }, py::arg("cos_angle"), py::arg("half_angle"),
+    "Fraction of a uniform cone of `half_angle` (radians), its axis at cos β = `cos_angle` (any shape) from a "
+    "receiver's normal, above the receiver's horizon: what EEVEE Next's sun shadow keeps on an open receiver.");
     m.def("sun_angle", [](const Doubles& spread) { return map_elements(spread, sun_angle); }, py::arg("spread"),
           "Angle (radians, full) of the sun written for each RMS angular radius in `spread` (any shape): "
           "clip(2√2·spread, 0, π), 0 below MIN_SUN_ANGLE.");
@@ -298,7 +310,8 @@ void bind_suns(py::module_& m) {
         return map_elements(angle, [sun_model](double a) { return sun_strength_per_flux(a, sun_model); });
     }, py::arg("angle"), py::arg("sun_model"),
     "Sun strength per unit of the light's flux ∫L dω for each sun angle (any shape) drawn as `sun_model`: "
-    "(1 + cos(angle/2))/2 for BLENDER4_CONE, 1 otherwise.");
+    "(1 + cos(angle/2))/2 for BLENDER4_CONE and EEVEE_NEXT_SHADOWED, r²/((2 + r²)(1 − cos(angle/2))) "
+    "with r = tan(angle/2) for EEVEE_LEGACY, 1 otherwise.");
 }
 
 }  // namespace

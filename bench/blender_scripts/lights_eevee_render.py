@@ -72,7 +72,7 @@ def render_all(out, eevee):
     for n in COUNTS:
         for limit in ((False, True) if eevee == LEGACY else (False,)):
             strength.default_value = 1.0
-            r = bpy.ops.penumbra.build_light_rig(filepath="", count=n, limit_shadows=limit,
+            r = bpy.ops.penumbra.build_light_rig(filepath="", count=n, limit_shadows=limit, target_renderer="EEVEE",
                                                  json_path=os.path.join(out, "rig.json"))
             assert r == {"FINISHED"}, r
             strength.default_value = 0.0

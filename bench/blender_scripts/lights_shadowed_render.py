@@ -49,7 +49,8 @@ def main(out, counts, samples):
     result = {"noise": rel(world_b), "noise mean": float(np.mean(world_b)) / mean}
     for n in counts:
         strength.default_value = 1.0
-        r = bpy.ops.penumbra.build_light_rig(filepath="", count=n, json_path=os.path.join(out, "rig.json"))
+        r = bpy.ops.penumbra.build_light_rig(filepath="", count=n, target_renderer="CYCLES",
+                                             json_path=os.path.join(out, "rig.json"))
         assert r == {"FINISHED"}, r
         strength.default_value = 0.0
         rig_a = render(f"rig_{n}", 1)

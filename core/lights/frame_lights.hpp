@@ -39,8 +39,10 @@ namespace penumbra::lights {
 
 enum class PowerMode { equal, region };
 
-// How Cycles spreads a sun's flux over its angle (sun_irradiance.hpp).
-enum class SunModel { point, blender3_disc, blender4_cone };
+// How a renderer spreads a sun's flux over its angle (sun_irradiance.hpp):
+// Cycles' models, EEVEE Next's shadowed sun (the cone, its shadow cut at the
+// receiver's own horizon) and EEVEE Legacy's sun (the cone, another power).
+enum class SunModel { point, blender3_disc, blender4_cone, eevee_next_shadowed, eevee_legacy };
 
 struct LightOptions {
     int count = 64;                 // N, at most the map's cell count

@@ -1,6 +1,7 @@
 #include "lights/irradiance_fit.hpp"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <numbers>
 
@@ -397,6 +398,33 @@ void hold_the_flux(const EnvironmentMap& map, const Shape& shape, Problem& p, Ei
     }
 }
 
+// EEVEE Next cuts a shadowed sun under each receiver's horizon
+// (eevee_next_shadowed); the flux held, only narrower suns lose less. The
+// shape is fitted as the cone, whose kernel the fit converges on, then the
+// suns are narrowed by the factor, of these, whose colours (solved again,
+// flux held) light the fit's normals closest to the map as EEVEE draws them.
+constexpr double eevee_narrowing[] = {1.0, 0.7, 0.5, 0.35, 0.25, 0.15};
+
+void narrow_for_eevee(const EnvironmentMap& map, Shape& shape, Problem& p, Eigen::MatrixXd& x,
+                      const IrradianceFitOptions& options) {
+    p.model = SunModel::eevee_next_shadowed;
+    Shape best = shape;
+    Eigen::MatrixXd best_x = x;
+    double best_error = std::numeric_limits<double>::infinity();
+    for (double factor : eevee_narrowing) {
+        Shape narrowed = shape;
+        for (double& h : narrowed.half) h *= factor;
+        Eigen::MatrixXd colours = x;
+        hold_the_flux(map, narrowed, p, colours);
+        Eigen::MatrixXd a;
+        kernels(p, narrowed, a, nullptr, nullptr);
+        const double error = relative_rmse(a * colours, p.target, options.luminance);
+        if (error < best_error) best_error = error, best = narrowed, best_x = colours;
+    }
+    shape = best;
+    x = best_x;
+}
+
 }  // namespace
 
 IrradianceFitResult fit_irradiance(const EnvironmentMap& map, std::vector<Light>& lights,
@@ -414,6 +442,8 @@ IrradianceFitResult fit_irradiance(const EnvironmentMap& map, std::vector<Light>
     Eigen::MatrixXd a;
     kernels(p, shape, a, nullptr, nullptr);
     result.error_before = relative_rmse(a * x, p.target, options.luminance);
+    const bool for_eevee_next = p.model == SunModel::eevee_next_shadowed;
+    if (for_eevee_next) p.model = SunModel::blender4_cone;
 
     double mu = 0.1;
     double error = solved_objective(p, shape, x);
@@ -424,6 +454,8 @@ IrradianceFitResult fit_irradiance(const EnvironmentMap& map, std::vector<Light>
         if (before - error < options.tolerance * before) break;
     }
     if (options.keep_flux) hold_the_flux(map, shape, p, x);
+    if (for_eevee_next && p.max_half > 0.0) narrow_for_eevee(map, shape, p, x, options);
+    p.model = options.sun_model;
     kernels(p, shape, a, nullptr, nullptr);
     result.error_after = relative_rmse(a * x, p.target, options.luminance);
 

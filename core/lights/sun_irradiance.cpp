@@ -79,6 +79,39 @@ double disc_kernel(double c, double h) {
 
 }  // namespace
 
+double cone_fraction_above_horizon(double c, double h) {
+    c = std::clamp(c, -1.0, 1.0);
+    h = std::clamp(h, 0.0, pi);
+    const double s = std::sin(h);
+    if (h <= 0.5 * pi && c >= s) return 1.0;
+    if (h <= 0.5 * pi && c <= -s) return 0.0;
+    if (h < 1e-9) return c > 0.0 ? 1.0 : 0.0;
+    // Rings at angle ψ from the axis: ω·n = cos ψ c + sin ψ sin β cos φ, so
+    // a ring is wholly on one side while ψ < ψ0 = |π/2 − β| and above the
+    // horizon on an arc 2φ₀, φ₀ = acos(−c cos ψ / (sin β sin ψ)), beyond it.
+    const double beta = std::acos(c), sin_b = std::sin(beta);
+    const double psi0 = std::min(h, std::abs(0.5 * pi - beta));
+    double above = c > 0.0 ? 2.0 * pi * (1.0 - std::cos(psi0)) : 0.0;
+    // ψ = ψ0 + t² takes the square-root onset at ψ0 out of the integrand.
+    static const UnitRule rule(48);
+    const double t_max = std::sqrt(std::max(0.0, h - psi0));
+    for (std::size_t i = 0; i < rule.x.size(); ++i) {
+        const double t = t_max * rule.x[i], psi = psi0 + t * t;
+        const double sin_psi = std::sin(psi);
+        const double denom = sin_b * sin_psi;
+        const double arg = denom > 1e-300 ? -c * std::cos(psi) / denom : (c * std::cos(psi) > 0.0 ? -1.0 : 1.0);
+        const double phi0 = std::acos(std::clamp(arg, -1.0, 1.0));
+        above += 2.0 * phi0 * sin_psi * 2.0 * t * t_max * rule.w[i];
+    }
+    return std::clamp(above / (2.0 * pi * (1.0 - std::cos(h))), 0.0, 1.0);
+}
+
+SunModel sun_model_for_renderer(int major, int minor, bool eevee, bool shadow) {
+    if (!eevee) return sun_model_for_blender(major, minor);
+    if (major < 4 || (major == 4 && minor < 2)) return SunModel::eevee_legacy;
+    return shadow ? SunModel::eevee_next_shadowed : SunModel::blender4_cone;
+}
+
 SunModel sun_model_for_blender(int major, int /*minor*/) {
     // docs/lights.md: the cone came with Cycles' 2023 light rework (4.0).
     return major >= 4 ? SunModel::blender4_cone : SunModel::blender3_disc;
@@ -93,19 +126,28 @@ double sun_angle(double spread) {
 double sun_half_angle(double spread) { return 0.5 * sun_angle(spread); }
 
 double sun_strength_per_flux(double angle, SunModel model) {
-    if (model != SunModel::blender4_cone) return 1.0;
+    if (model == SunModel::eevee_legacy) {
+        // EEVEE Legacy clamps the radius to at least 0.001 and the angle to 179.9°.
+        const double h = 0.5 * std::min(angle, 179.9 / 180.0 * pi);
+        const double r2 = std::pow(std::max(0.001, std::tan(h)), 2);
+        const double one_minus_cos = 2.0 * std::pow(std::sin(0.5 * h), 2);
+        // A point sun (h below the clamp) carries its strength as flux.
+        return h < 1e-3 ? 1.0 : r2 / ((2.0 + r2) * one_minus_cos);
+    }
+    if (model != SunModel::blender4_cone && model != SunModel::eevee_next_shadowed) return 1.0;
     return 0.5 * (1.0 + std::cos(0.5 * angle));
 }
 
 double sun_kernel(double c, double h, SunModel model) {
     c = std::clamp(c, -1.0, 1.0);
     if (model == SunModel::point) return std::max(0.0, c);
+    const bool cone = model != SunModel::blender3_disc;
     if (h < point_half_angle) {
-        const double facing = model == SunModel::blender4_cone ? 0.5 * (1.0 + std::cos(h))
-                                                                : 2.0 * std::cos(h) / (1.0 + std::cos(h));
+        const double facing = cone ? 0.5 * (1.0 + std::cos(h)) : 2.0 * std::cos(h) / (1.0 + std::cos(h));
         return facing * std::max(0.0, c);
     }
-    return model == SunModel::blender4_cone ? cone_kernel(c, h) : disc_kernel(c, h);
+    if (model == SunModel::eevee_next_shadowed) return cone_kernel(c, h) * cone_fraction_above_horizon(c, h);
+    return cone ? cone_kernel(c, h) : disc_kernel(c, h);
 }
 
 double sun_kernel_slope(double c, double h, SunModel model) {

@@ -19,6 +19,20 @@
 //   blender4_cone  Blender ≥ 4.0 (4.5, 5.x): a cone of uniform radiance,
 //                  rgb/(2π(1 − cos h)); a facing surface receives
 //                  rgb·(1 + cos h)/2 (the add-on's strength).
+//   eevee_next_shadowed  EEVEE Next (4.2+) drawing a sun that casts a
+//                  shadow: the cone's radiance and horizon-clipped
+//                  irradiance, times the fraction of the shadow's cone above
+//                  the receiver's horizon. EEVEE traces a sun's shadow with
+//                  rays spread uniformly over the whole cone
+//                  (shadow_ray_generate_directional) and a ray under the
+//                  receiver's horizon meets the receiver in the shadow map,
+//                  so the part of the sun already clipped by the horizon is
+//                  cut a second time (docs/lights.md, "Suns in EEVEE").
+//   eevee_legacy   EEVEE Legacy (3.x): a disc of radius r = tan h at unit
+//                  distance, i.e. the cone, of radiance
+//                  strength·(1 + r²/2)/(π r²) (eevee_lights.c); its kernel
+//                  per unit flux is the cone's, its strength per flux
+//                  r²/((2 + r²)(1 − cos h)).
 // The kernel K(c, h) below is the irradiance per unit flux on a surface whose
 // normal makes cos β = c with d; it depends on nothing else (the sun is
 // rotationally symmetric about d), and is smooth (C¹) in c for h > 0.
@@ -36,6 +50,17 @@ namespace penumbra::lights {
 
 // The sun model of a Blender version (major, minor): blender4_cone from 4.0 on.
 SunModel sun_model_for_blender(int major, int minor);
+
+// The sun model of a target renderer in a Blender version: `eevee` false is
+// Cycles (sun_model_for_blender); true is EEVEE Legacy before 4.2
+// (eevee_legacy) and EEVEE Next from 4.2 on, eevee_next_shadowed for a sun
+// casting a shadow, the Cycles cone without (docs/lights.md, "Suns in EEVEE").
+SunModel sun_model_for_renderer(int major, int minor, bool eevee, bool shadow);
+
+// Fraction of a uniform cone of half-angle h whose axis makes cos β = c with
+// a receiver's normal that lies above the receiver's horizon: 1 for
+// c ≥ sin h, 0 for c ≤ −sin h.
+double cone_fraction_above_horizon(double c, double half_angle);
 
 // Suns narrower than this (radians, full angle) are written with angle 0:
 // Cycles drops a sun of angle <= 1e-10 (its cone pdf overflows a float), and

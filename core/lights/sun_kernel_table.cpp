@@ -24,14 +24,17 @@ double t_of_s(double s) { return std::sin(0.5 * pi * s); }
 // forms still have their digits and B differs from its limit by O(h²).
 constexpr double point_half_angle = 1e-4, first_column = 1e-3;
 
+// Both cone models face the sun alike: EEVEE's shadow cuts only the band.
+bool is_cone(SunModel model) { return model != SunModel::blender3_disc; }
+
 double facing(double h, SunModel model) {
     const double c = std::cos(h);
-    return model == SunModel::blender4_cone ? 0.5 * (1.0 + c) : 2.0 * c / (1.0 + c);
+    return is_cone(model) ? 0.5 * (1.0 + c) : 2.0 * c / (1.0 + c);
 }
 
 double facing_slope(double h, SunModel model) {
     const double c = std::cos(h), s = std::sin(h);
-    return model == SunModel::blender4_cone ? -0.5 * s : -2.0 * s / ((1.0 + c) * (1.0 + c));
+    return is_cone(model) ? -0.5 * s : -2.0 * s / ((1.0 + c) * (1.0 + c));
 }
 
 // Catmull–Rom weights and their derivatives at u ∈ [0, 1] for the points
@@ -66,8 +69,12 @@ struct ShapeTable {
 };
 
 const ShapeTable& table(SunModel model) {
+    if (model == SunModel::eevee_next_shadowed) {
+        static const ShapeTable shadowed(SunModel::eevee_next_shadowed);  // built only when asked for
+        return shadowed;
+    }
     static const ShapeTable disc(SunModel::blender3_disc), cone(SunModel::blender4_cone);
-    return model == SunModel::blender3_disc ? disc : cone;
+    return model == SunModel::blender3_disc ? disc : cone;  // EEVEE Legacy's kernel is the cone's
 }
 
 }  // namespace

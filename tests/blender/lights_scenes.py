@@ -67,3 +67,17 @@ def rig_state(scene, json_path):
     state["suns"] = suns
     state["json"] = open(json_path).read() if os.path.exists(json_path) else None
     return state
+
+
+def window_addon():
+    """The add-on registered for a window test (blender_window.py: pytest on a
+    worker thread, bpy on the main one); yields the module, then unregisters."""
+    from blender_window import on_main
+
+    def register():
+        import penumbra
+        penumbra.register()
+        return penumbra
+    penumbra = on_main(register)
+    yield penumbra
+    on_main(penumbra.unregister)

@@ -21,7 +21,7 @@ from ..core_settings import limits
 PREVIEW_NAME = "Penumbra Light Rig Preview"
 _SETTING_NAMES = ("filepath", "mapping", "colorspace", "count", "sampler", "power", "blue_noise", "fit_irradiance",
                   "tracking", "temporal_filter", "filter_brightness", "cluster_max", "adaptive_tolerance", "frame_start", "frame_end",
-                  "limit_shadows", "json_path")
+                  "limit_shadows", "shadow_budget", "target_renderer", "json_path")
 
 
 def running_builds():
@@ -118,12 +118,17 @@ class _Job:
             self.frames = min(self.source.frame_count, wanted)
         if self.frames > 1 and self.fps <= 0.0:
             self.fps = self.scene.render.fps / self.scene.render.fps_base
+        # The fit assumes every sun casts a shadow unless only the 8 strongest do:
+        # then the shadowless majority is drawn as Cycles draws it.
+        self.eevee = rig_objects.targets_eevee(op.target_renderer, self.scene)
+        budget = rig_objects.shadow_budget_of(op.shadow_budget, op.limit_shadows)
+        self.sun_model = rig_objects.sun_model(eevee=self.eevee, shadow=budget == 0)
         self.builder = self.core.lights.RigBuilder(
             count=op.count, sampler=op.sampler, blue_noise=op.blue_noise, power=op.power, mapping=self.mapping,
             temporal_filter=op.temporal_filter, frames_per_second=self.fps, cluster_max=op.cluster_max,
             adaptive_tolerance=op.adaptive_tolerance, world_from_map=self.world_from_map,
             fit_irradiance=op.fit_irradiance, tracking=op.tracking, filter_brightness=op.filter_brightness,
-            sun_model=rig_objects.sun_model())
+            sun_model=self.sun_model)
         self.done = 0
 
     def _check_colorspace(self, name):
@@ -194,7 +199,8 @@ class _Job:
         # the JSON (its text and folder) and the preview picture.
         json_path, json_text = self.rig_json(rig)
         image = self.builder.preview(rig["directions"][0], rig["rgb"][0], 512)
-        write = rig_objects.write_rig(self.scene, s, rig, op.frame_start, op.limit_shadows)
+        write = rig_objects.write_rig(self.scene, s, rig, op.frame_start, op.limit_shadows, eevee=self.eevee,
+                                      shadow_budget=op.shadow_budget)
         try:
             rig_objects.store_preview(PREVIEW_NAME, image)
             self.write_json(json_path, json_text)
@@ -269,6 +275,9 @@ class PENUMBRA_OT_build_light_rig(modal_job.JobOperator, bpy.types.Operator):
     frame_start: bpy.props.IntProperty(name="Start", default=1)
     frame_end: bpy.props.IntProperty(name="End", default=250)
     limit_shadows: bpy.props.BoolProperty(name="Shadows for 8 Strongest", default=False)
+    shadow_budget: bpy.props.IntProperty(name="Shadow Budget", default=0, min=0)
+    target_renderer: bpy.props.EnumProperty(name="Target Renderer", items=settings.TARGET_RENDERER_ITEMS,
+                                            default="SCENE")
     json_path: bpy.props.StringProperty(name="JSON", default="//penumbra_light_rig.json")
 
     def _take_scene_defaults(self, context):

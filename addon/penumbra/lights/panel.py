@@ -79,8 +79,11 @@ class PENUMBRA_PT_light_rig_output(_SubPanel, bpy.types.Panel):
     def draw(self, context):
         layout = _split(self.layout)
         s = context.scene.penumbra.light_rig
+        layout.prop(s, "target_renderer", text="Renderer")
         layout.prop(s, "json_path")
-        layout.column(heading="Shadows").prop(s, "limit_shadows", text="8 Strongest")
+        shadows = layout.column(heading="Shadows")
+        shadows.prop(s, "limit_shadows", text="8 Strongest")
+        shadows.prop(s, "shadow_budget", text="Budget")
         if bpy.app.version < (4, 2, 0):
             sidebar.draw_wrapped(layout, context, "EEVEE Legacy draws at most 128 lights and 8 shadowed suns: "
                                  "limit shadows, or keep Lights at 128 or fewer", icon="INFO")

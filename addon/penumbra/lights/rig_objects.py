@@ -24,10 +24,20 @@ COLLECTION_NAME = "Penumbra Light Rig"
 LINEAR = 1  # FCurve keyframe interpolation enum value of 'LINEAR'
 
 
-def sun_model(version=None):
-    """The _penumbra.lights.SunModel this Blender's Cycles (or `version`'s) draws suns with."""
+def sun_model(version=None, eevee=False, shadow=True):
+    """The _penumbra.lights.SunModel this Blender's (or `version`'s) Cycles, or
+    its EEVEE when `eevee`, draws a sun with (casting a shadow or not)."""
     major, minor = tuple(bpy.app.version if version is None else version)[:2]
-    return native.require().lights.sun_model_for_blender(major, minor)
+    return native.require().lights.sun_model_for_renderer(major, minor, eevee, shadow)
+
+
+def targets_eevee(target_renderer, scene):
+    """Whether a rig for `target_renderer` (settings.TARGET_RENDERER_ITEMS) is
+    drawn by EEVEE: SCENE follows the scene's engine (BLENDER_EEVEE, or
+    BLENDER_EEVEE_NEXT in 4.2-4.5)."""
+    if target_renderer == "SCENE":
+        return scene.render.engine.startswith("BLENDER_EEVEE")
+    return target_renderer == "EEVEE"
 
 
 def sun_quaternions(directions):
@@ -80,7 +90,20 @@ def _set_keys(id_block, path, index, frames, values):
     fc.update()
 
 
-def shadowed_indices(mean_power, limit=8):
+# EEVEE Legacy's cascaded shadow maps go to at most this many suns; the
+# alias limit_shadows is a shadow budget of this many.
+LEGACY_SHADOWED_SUNS = 8
+
+
+def shadow_budget_of(shadow_budget, limit_shadows):
+    """The suns that may cast a shadow (0: every sun): `shadow_budget`, or
+    LEGACY_SHADOWED_SUNS when only the alias limit_shadows asks for a limit."""
+    if shadow_budget > 0:
+        return int(shadow_budget)
+    return LEGACY_SHADOWED_SUNS if limit_shadows else 0
+
+
+def shadowed_indices(mean_power, limit=LEGACY_SHADOWED_SUNS):
     """Indices of the `limit` strongest lights by mean power (ties: lower index)."""
     order = np.argsort(-np.asarray(mean_power, dtype=float), kind="stable")
     return set(int(k) for k in order[:limit])
@@ -89,7 +112,7 @@ def shadowed_indices(mean_power, limit=8):
 class _Values:
     """Everything the suns get, computed and checked before the .blend is touched."""
 
-    def __init__(self, rig, frame_start, limit_shadows):
+    def __init__(self, rig, frame_start, budget, eevee=False):
         self.slots = int(rig["slots"])
         rgb = np.asarray(rig["rgb"], dtype=float)              # (F, S, 3)
         directions = np.asarray(rig["directions"], dtype=float)
@@ -107,9 +130,14 @@ class _Values:
         self.colour = np.where(peak[..., None] > 0, rgb / np.maximum(peak[..., None], 1e-30), 1.0)
         lights = native.require().lights
         self.angle = lights.sun_angle(spread)
-        self.strength = peak * lights.sun_strength_per_flux(self.angle, sun_model())
-        strongest = shadowed_indices(power.mean(axis=0))
-        self.shadow = [(k in strongest) if limit_shadows else True for k in range(self.slots)]
+        strongest = shadowed_indices(power.mean(axis=0), budget)
+        self.shadow = [(k in strongest) if budget > 0 else True for k in range(self.slots)]
+        # EEVEE Legacy gives a sun another power per strength than Cycles does;
+        # EEVEE Next the same, shadowed or not (docs/lights.md, "Suns in EEVEE").
+        models = [sun_model(eevee=eevee, shadow=self.shadow[k]) for k in range(self.slots)]
+        per_flux = np.stack([lights.sun_strength_per_flux(self.angle[:, k], models[k]) for k in range(self.slots)],
+                            axis=1)
+        self.strength = peak * per_flux
         self.quats = [sun_quaternions(directions[:, k]) for k in range(self.slots)]
         self.frames = np.arange(self.n_frames, dtype=float) + frame_start
 
@@ -202,14 +230,16 @@ class _Snapshot:
                 children.unlink(self.collection)
 
 
-def write_rig(scene, settings, rig, frame_start, limit_shadows):
+def write_rig(scene, settings, rig, frame_start, limit_shadows, eevee=False, shadow_budget=0):
     """Creates or updates the collection, root and suns from `rig` (the dict of
-    _penumbra.lights.RigBuilder.finish) with keyframes from frame_start.
+    _penumbra.lights.RigBuilder.finish) with keyframes from frame_start;
+    only the `shadow_budget` strongest suns cast a shadow (0: every sun;
+    limit_shadows, its alias, is a budget of 8).
 
     All or nothing: the values are computed and checked first; if anything
     fails while the .blend is being changed, what was created is removed and
     what was changed is put back before the error propagates."""
-    values = _Values(rig, frame_start, limit_shadows)
+    values = _Values(rig, frame_start, shadow_budget_of(shadow_budget, limit_shadows), eevee)
     snapshot = _Snapshot(scene, settings)
     try:
         coll = settings.collection

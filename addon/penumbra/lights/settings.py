@@ -22,6 +22,13 @@ TRACKING_ITEMS = (
     ("RESAMPLE", "Resample", "The paper's: every frame sampled anew, light k from the same point (lights wander "
                              "when the map turns)"),
 )
+TARGET_RENDERER_ITEMS = (
+    ("SCENE", "Scene", "The renderer the scene is set to when the rig is built"),
+    ("CYCLES", "Cycles", "Suns as Cycles draws them"),
+    ("EEVEE", "EEVEE", "Suns as this Blender's EEVEE draws them: EEVEE Legacy before 4.2 (another sun power), "
+                       "EEVEE Next from 4.2 (a shadowed sun's shadow also cuts the part of it below a surface's "
+                       "horizon)"),
+)
 POWER_ITEMS = (
     ("REGION", "Region", "Each light carries the power and colour of its region of the map, at its energy centroid"),
     ("EQUAL", "Equal", "The paper's: every light gets the same power"),
@@ -64,6 +71,13 @@ class LightRigSceneSettings(bpy.types.PropertyGroup):
     limit_shadows: bpy.props.BoolProperty(
         name="Shadows for 8 Strongest", default=False,
         description="Only the 8 strongest suns cast shadows (EEVEE Legacy's limit)")
+    shadow_budget: bpy.props.IntProperty(
+        name="Shadow Budget", default=0, min=0,
+        description="Only this many strongest suns cast shadows (0: every sun; Shadows for 8 Strongest is a "
+                    "budget of 8)")
+    target_renderer: bpy.props.EnumProperty(
+        name="Target Renderer", items=TARGET_RENDERER_ITEMS, default="SCENE",
+        description="The renderer the suns are fitted for (docs/lights.md, \"Suns in EEVEE\")")
     json_path: bpy.props.StringProperty(name="JSON", default="//penumbra_light_rig.json", subtype="FILE_PATH",
                                         description="Per-frame lights for game engines, written beside the .blend")
     collection: bpy.props.PointerProperty(type=bpy.types.Collection, name="Rig Collection")

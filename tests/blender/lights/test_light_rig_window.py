@@ -21,6 +21,7 @@ import os
 import bpy
 import pytest
 
+import lights_scenes
 from blender_window import let_the_loop_turn, on_main, wait_until
 
 FRAMES = 24
@@ -29,14 +30,7 @@ LIGHTS = 6
 
 @pytest.fixture(scope="module")
 def addon():
-    def register():
-        import penumbra
-        penumbra.register()
-        return penumbra
-
-    penumbra = on_main(register)
-    yield penumbra
-    on_main(penumbra.unregister)
+    yield from lights_scenes.window_addon()
 
 
 @pytest.fixture

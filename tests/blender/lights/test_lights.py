@@ -30,7 +30,7 @@ def _sun_rgb(ob):
     """∫L dω a sun carries. Blender 4.x Cycles: a uniform cone of half-angle
     h whose facing irradiance is the strength, so ∫L dω = strength·2/(1+cos h);
     3.x: a disc whose ∫L dω is the strength (checked by the render tests
-    below against Cycles itself)."""
+    below against Cycles itself). For a rig built for Cycles (target_renderer)."""
     rgb = np.array(ob.data.color) * ob.data.energy
     if bpy.app.version >= (4, 0, 0):
         rgb = rgb * 2.0 / (1.0 + math.cos(ob.data.angle / 2))
@@ -51,6 +51,7 @@ def _rig_irradiance(scene, normals):
 
 def test_rig_reproduces_the_maps_irradiance_and_is_updated_not_duplicated(addon, tmp_path):
     scene = addon
+    scene.render.engine = "CYCLES"  # the rig as Cycles draws it (target_renderer follows the engine)
     img = sky_and_sun()
     path = write_map(str(tmp_path / "map.exr"), img)
     json_path = str(tmp_path / "rig.json")
@@ -127,6 +128,7 @@ def test_rig_colours_are_in_the_files_working_space(addon, tmp_path):
     so a rig built in an ACEScg file holds the same light in ACEScg."""
     from penumbra import color
     scene = addon
+    scene.render.engine = "CYCLES"  # the rig as Cycles draws it (target_renderer follows the engine)
     config = color.blender_config()
     img = sky_and_sun()
     img[..., 0] *= 0.6  # a colour that differs between the spaces
@@ -510,6 +512,13 @@ def test_shadow_limit_gives_shadows_to_the_eight_strongest(addon, tmp_path):
     assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, limit_shadows=False,
                                             json_path=json_path) == {"FINISHED"}
     assert all(o.data.use_shadow for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT")
+    # The named budget: its own count, and limit_shadows is a budget of 8.
+    assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, shadow_budget=3,
+                                            json_path=json_path) == {"FINISHED"}
+    suns = {int(o[INDEX_KEY]): o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"}
+    doc = json.load(open(json_path))
+    power = np.mean([[np.dot(l["rgb"], y) for l in f["lights"]] for f in doc["frames"]], axis=0)
+    assert sorted(k for k, o in suns.items() if o.data.use_shadow) == sorted(np.argsort(-power)[:3].tolist())
 
 
 def test_fit_irradiance_makes_the_suns_as_drawn_closer_to_the_maps_irradiance(addon, tmp_path):
@@ -525,7 +534,7 @@ def test_fit_irradiance_makes_the_suns_as_drawn_closer_to_the_maps_irradiance(ad
     model = "BLENDER4_CONE" if bpy.app.version >= (4, 0, 0) else "BLENDER3_DISC"
     errors = {}
     for fit in (False, True):
-        assert bpy.ops.penumbra.build_light_rig(filepath=path, count=16, fit_irradiance=fit,
+        assert bpy.ops.penumbra.build_light_rig(filepath=path, count=16, fit_irradiance=fit, target_renderer="CYCLES",
                                                 json_path=str(tmp_path / f"{fit}.json")) == {"FINISHED"}
         suns = [o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"]
         d = np.array([(o.matrix_world.to_3x3() @ mathutils.Vector((0, 0, 1))).normalized() for o in suns])

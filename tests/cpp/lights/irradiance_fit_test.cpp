@@ -164,6 +164,23 @@ TEST(LightsIrradianceFit, a_black_map_gives_black_lights) {
     }
 }
 
+TEST(LightsIrradianceFit, a_rig_for_eevee_next_lights_closer_as_eevee_draws_it_and_keeps_the_flux) {
+    // docs/lights.md "Suns in EEVEE": EEVEE Next cuts a shadowed sun under the
+    // receiver's horizon; the rig fitted for it must beat the Cycles rig drawn
+    // by EEVEE, and carry the same flux (the fit only narrows and recolours).
+    const EnvironmentMap map = as_map(two_suns_on_a_sky(128, 64));
+    for (int count : {8, 16, 32}) {
+        const FrameLights cycles = rig(map, count, true, SunModel::blender4_cone);
+        const FrameLights eevee = rig(map, count, true, SunModel::eevee_next_shadowed);
+        const double cut = rig_error(map, cycles, SunModel::eevee_next_shadowed);
+        EXPECT_LT(rig_error(map, eevee, SunModel::eevee_next_shadowed), 0.8 * cut) << "N " << count;
+        Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+        for (const Light& l : cycles.lights) a += l.rgb;
+        for (const Light& l : eevee.lights) b += l.rgb;
+        EXPECT_NEAR((b - a).norm() / a.norm(), 0.0, 1e-6) << "N " << count;
+    }
+}
+
 TEST(LightsIrradianceFit, a_single_pixel_sun_8_orders_above_the_sky_stays_finite_and_improves) {
     Image im = testing::constant_image(128, 64, 1e-3f, 1e-3f, 1e-3f);
     for (int ch = 0; ch < 3; ++ch) im.at(40, 20, ch) = 1e5f;  // one pixel, 1e8 × the sky

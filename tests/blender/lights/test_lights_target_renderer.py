@@ -1,0 +1,57 @@
+"""build_light_rig's target renderer (docs/lights.md, "Suns in EEVEE"): the
+model the fit minimises against and the strength each sun is written with
+follow the renderer the rig is for, the scene's engine by default."""
+
+import bpy
+import numpy as np
+
+from lights_scenes import core_module, sky_and_sun, write_map
+
+
+def _eevee_engine():
+    return "BLENDER_EEVEE_NEXT" if (4, 2, 0) <= bpy.app.version < (5, 0, 0) else "BLENDER_EEVEE"
+
+
+def _suns(scene):
+    from penumbra.lights import rig_objects
+    return sorted((o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"),
+                  key=lambda o: o[rig_objects.INDEX_KEY])
+
+
+def _build(path, tmp_path, **kw):
+    r = bpy.ops.penumbra.build_light_rig(filepath=path, count=16, json_path=str(tmp_path / "rig.json"), **kw)
+    assert r == {"FINISHED"}, r
+
+
+def test_the_scenes_engine_picks_the_sun_model_and_the_strengths(addon, tmp_path):
+    from penumbra.lights import rig_objects
+    scene = addon
+    lights = core_module().lights
+    path = write_map(str(tmp_path / "map.exr"), sky_and_sun(radius=0.6))
+    eevee_model = lights.sun_model_for_renderer(*bpy.app.version[:2], True, True)
+    assert eevee_model.name == ("EEVEE_LEGACY" if bpy.app.version < (4, 2, 0) else "EEVEE_NEXT_SHADOWED")
+    picked = {}
+    for engine in ("CYCLES", _eevee_engine()):
+        scene.render.engine = engine
+        _build(path, tmp_path)
+        suns = _suns(scene)
+        model = rig_objects.sun_model(eevee=engine != "CYCLES")
+        angle = np.array([o.data.angle for o in suns])
+        assert sum(o.data.energy for o in suns) > 0
+        picked[engine] = (model.name, np.array([o.data.energy for o in suns]), angle)
+    assert picked["CYCLES"][0] != picked[_eevee_engine()][0]
+    # The same map fitted for EEVEE writes other suns than for Cycles.
+    assert not np.allclose(picked["CYCLES"][1], picked[_eevee_engine()][1], rtol=1e-3)
+
+
+def test_an_explicit_target_overrides_the_scenes_engine(addon, tmp_path):
+    scene = addon
+    path = write_map(str(tmp_path / "map.exr"), sky_and_sun(radius=0.6))
+    scene.render.engine = "CYCLES"
+    _build(path, tmp_path, target_renderer="EEVEE")
+    for_eevee = [o.data.energy for o in _suns(scene)]
+    scene.render.engine = _eevee_engine()
+    _build(path, tmp_path)
+    np.testing.assert_allclose([o.data.energy for o in _suns(scene)], for_eevee, rtol=1e-6)
+    _build(path, tmp_path, target_renderer="CYCLES")
+    assert not np.allclose([o.data.energy for o in _suns(scene)], for_eevee, rtol=1e-3)
