@@ -7,8 +7,8 @@ if "bpy" in locals():
     import importlib
     for _name in ("interface", "settings", "ramp", "node_groups", "noise_maths", "table_image", "node_builder",
                   "lookup_layout", "filter_quality", "noise_statistics", "noise_model", "noise_nodes",
-                  "filtered_ramp", "footprint", "point_footprint", "point_filter", "noise_filter", "microsurface", "height_ramp",
-                  "slope_ramp", "sample_count", "material", "surface_filter", "operators", "panel"):
+                  "filtered_ramp", "footprint", "point_footprint", "point_filter", "noise_filter", "microsurface",
+                  "height_ramp", "slope_ramp", "sample_count", "material", "surface_filter", "operators", "panel"):
         if _name in locals():
             importlib.reload(locals()[_name])
 

@@ -325,8 +325,8 @@ class BakePlan:
         group_node.location = ramp.location
         group_node["penumbra_original_ramp"] = ramp.name
         if single is not None:      # swapped by the sample count, as the Noise Filter's (sample_count.fit_group)
-            group_node[sample_count.GROUP_AT_ONE_SAMPLE] = group
-            group_node[sample_count.GROUP_ABOVE_ONE_SAMPLE] = single
+            sample_count.remember_group(group_node, sample_count.GROUP_AT_ONE_SAMPLE, group)
+            sample_count.remember_group(group_node, sample_count.GROUP_ABOVE_ONE_SAMPLE, single)
             sample_count.fit_group(group_node, self.scene)
         # Outputs: whatever the ramp fed now comes from the group.
         for out_name in ("Color", "Alpha"):
@@ -368,15 +368,16 @@ class BakePlan:
         if eevee_taps < self.taps:
             # Too costly for EEVEE at this many taps: keep a smaller group
             # for it, which the render_init handler swaps in.
-            filter_node[sample_count.GROUP_FOR_CYCLES] = filter_node.node_tree
-            filter_node[sample_count.GROUP_FOR_EEVEE] = noise_filter.noise_filter_group(
-                octave_image, table, self.noise_model, self.filter_stddev, eevee_taps,
-                self.quality.analytic_octaves, self.point)
+            sample_count.remember_group(filter_node, sample_count.GROUP_FOR_CYCLES, filter_node.node_tree)
+            eevee = noise_filter.noise_filter_group(octave_image, table, self.noise_model, self.filter_stddev,
+                                                    eevee_taps, self.quality.analytic_octaves, self.point)
+            sample_count.remember_group(filter_node, sample_count.GROUP_FOR_EEVEE, eevee)
         if self.point:
-            filter_node[sample_count.GROUP_AT_ONE_SAMPLE] = filter_node.node_tree
-            filter_node[sample_count.GROUP_ABOVE_ONE_SAMPLE] = noise_filter.noise_filter_group(
-                octave_image, table, self.noise_model, self.filter_stddev, self.taps,
-                self.quality.analytic_octaves, point=True, with_taps=False)
+            sample_count.remember_group(filter_node, sample_count.GROUP_AT_ONE_SAMPLE, filter_node.node_tree)
+            above = noise_filter.noise_filter_group(octave_image, table, self.noise_model, self.filter_stddev,
+                                                    self.taps, self.quality.analytic_octaves, point=True,
+                                                    with_taps=False)
+            sample_count.remember_group(filter_node, sample_count.GROUP_ABOVE_ONE_SAMPLE, above)
             sample_count.fit_group(filter_node, self.scene)
         sample_count.drive_samples(filter_node, self.scene)
         filter_node.name = filter_node.label = "Penumbra Noise Filter"

@@ -26,8 +26,8 @@ def test_default_preset_bakes_one_evaluation_above_one_sample(addon, tmp_path):
     for name in ("Minor", "Major"):
         assert filter_node.inputs["Point " + name].links[0].from_socket == point.outputs[name]
     assert ramp_node.inputs["Mixture"].links[0].from_socket == filter_node.outputs["Mixture"]
-    one = filter_node[sample_count.GROUP_AT_ONE_SAMPLE]
-    many = filter_node[sample_count.GROUP_ABOVE_ONE_SAMPLE]
+    one = sample_count.remembered_group(filter_node, sample_count.GROUP_AT_ONE_SAMPLE)
+    many = sample_count.remembered_group(filter_node, sample_count.GROUP_ABOVE_ONE_SAMPLE)
     assert one["penumbra_taps"] == 16 and one["penumbra_point"]
     # Above one sample: the octaves once each, no taps, no octave table.
     assert sum(n.bl_idname == "ShaderNodeTexNoise" for n in many.nodes) == 5
@@ -37,7 +37,8 @@ def test_default_preset_bakes_one_evaluation_above_one_sample(addon, tmp_path):
     for samples, group in ((1, one), (4, many), (1, one)):
         _render(addon, str(tmp_path / f"s{samples}.exr"), samples, 0)     # render_init picks the group
         assert filter_node.node_tree == group
-        assert (ramp_node.node_tree == ramp_node[sample_count.GROUP_AT_ONE_SAMPLE]) == (samples == 1)
+        at_one = sample_count.remembered_group(ramp_node, sample_count.GROUP_AT_ONE_SAMPLE)
+        assert (ramp_node.node_tree == at_one) == (samples == 1)
     assert sorted((l.from_socket.name, l.to_socket.name) for l in material.node_tree.links
                   if filter_node in (l.from_node, l.to_node)) == links
     assert interface.socket_names(ramp_node.node_tree, "INPUT") == ["Mean", "Sigma", "Offsets", "Variances",
@@ -59,7 +60,11 @@ def test_preset_is_saved_with_the_file_and_a_change_waits_for_a_bake(addon, tmp_
     material = bpy.data.materials[name]
     filter_node = _node(material, "Penumbra Noise Filter")
     assert filter_quality.baked_quality(filter_node) == "POINT_COARSE"
-    assert filter_node[sample_count.GROUP_ABOVE_ONE_SAMPLE]["penumbra_analytic_octaves"] == 1
+    # Both groups came back with the file, the one not in use too.
+    for key in (sample_count.GROUP_AT_ONE_SAMPLE, sample_count.GROUP_ABOVE_ONE_SAMPLE):
+        assert sample_count.remembered_group(filter_node, key) is not None
+    assert sample_count.remembered_group(filter_node, sample_count.GROUP_ABOVE_ONE_SAMPLE)[
+        "penumbra_analytic_octaves"] == 1
     # A filter baked before the presets has no property: the 16-tap mixture.
     del filter_node[filter_quality.NODE_PROPERTY]
     assert filter_quality.baked_quality(filter_node) == filter_quality.LEGACY

@@ -69,7 +69,8 @@ def test_point_shrinkage_keeps_coarse_octaves_and_drops_fine_ones():
 
 def test_presets_name_the_legacy_filter_and_a_different_default():
     q = filter_quality.QUALITIES
-    assert q[filter_quality.LEGACY] == (q[filter_quality.LEGACY].label, 16, 0, True, q[filter_quality.LEGACY].description)
+    legacy = q[filter_quality.LEGACY]
+    assert (legacy.taps, legacy.analytic_octaves, legacy.mixture) == (16, 0, True)
     assert filter_quality.DEFAULT in q and filter_quality.DEFAULT != filter_quality.LEGACY
     assert all(p.taps == 1 or p.analytic_octaves == 0 for p in q.values())
 
