@@ -11,6 +11,8 @@ Debian's Blender 3.4 under Xvfb),
 with the issue's PASS/FAIL criteria printed at the end.
 
     make bench BENCH=colormap                          full sweep (~45 min on 2 cores)
+    PENUMBRA_BENCH_SECTIONS=equal_time make bench BENCH=colormap   only the equal-time sweep of the
+                                                   filter's presets (issue #25), its section replaced
     PENUMBRA_BENCH_QUICK=1 make bench BENCH=colormap   quick check of the sweep's harness (~3 min;
                                                    the other sections are left out)
 
@@ -503,10 +505,118 @@ def bench_footprint():
     return out
 
 
+EQUAL_TIME_MARKER = "## Equal time: the Noise Filter's quality presets"
+QUALITY_TABLE = os.path.join(ROOT, "addon", "penumbra", "colormap", "filter_quality.json")
+
+
+def bench_equal_time():
+    """Issue #25: RMSE against render time for the plain ramp and every
+    Noise Filter preset (bench/blender_scripts/colormap_equal_time.py, one
+    process per run), the equal-time ratios, a plot, and the presets' table
+    for the add-on's panel (addon/penumbra/colormap/filter_quality.json)."""
+    folder = os.path.join(SWEEP_OUT, "equal-time")
+    os.makedirs(folder, exist_ok=True)
+    out_json = os.path.join(folder, "equal_time.json")
+    log_path = os.path.join(folder, "equal_time.log")
+    with open(log_path, "w") as log:
+        proc = subprocess.run([os.path.join(ROOT, ".venv", "bin", "python"),
+                               os.path.join(SCRIPTS, "colormap_equal_time.py"), "--", out_json], cwd=ROOT,
+                              stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
+    if proc.returncode != 0 or not os.path.isfile(out_json):
+        return [EQUAL_TIME_MARKER, "", "equal-time sweep failed:", "```", open(log_path).read()[-3000:], "```", ""]
+    return equal_time_section(json.load(open(out_json)))
+
+
+def equal_time_section(data, docs=DOCS):
+    """The page's section from colormap_equal_time.py's results; also writes
+    the plot and the add-on's presets table."""
+    scenes = data["scenes"]
+    size = "×".join(str(v) for v in data["size"])
+    out = [EQUAL_TIME_MARKER, "",
+           f"`bench/blender_scripts/colormap_equal_time.py`, Blender {data['blender']}, Cycles on the CPU, "
+           f"{data['threads']} threads, {size}: the plain ramp and every preset of the Noise Filter "
+           "(`addon/penumbra/colormap/filter_quality.py`) baked on copies of one material and rendered in one "
+           "process, methods interleaved after one untimed warm-up render each; seconds are the median over "
+           f"{data['repeats']} seeds of `bpy.ops.render.render` (wall, and CPU of the process: all threads), RMSE "
+           f"the mean over those seeds against the plain ramp at {data['reference_spp']} spp. The equal-time ratio "
+           "is the preset's RMSE over the plain ramp's read log-log off its own 1–256 spp curve at the preset's "
+           "time, clamped at the curve's ends (a filtered render slower than the plain ramp at 256 spp is "
+           "compared with that render's error, which flatters it). Goal of issue #25: ≤ 0.7 at 1, 4, 16 and "
+           f"64 spp. Scenes run: {', '.join(scenes)} (the other benchmark scenes were not run in this sweep).", ""]
+    presets = [p for p in next(iter(scenes.values()))["ratios"]]
+    table = {}
+    for name, scene in scenes.items():
+        load = scene["load_average"]
+        out += [f"### {name}", "", f"Load average (1, 5, 15 min) before: {', '.join(f'{v:.1f}' for v in load[0])}; "
+                f"after: {', '.join(f'{v:.1f}' for v in load[1])} (2-core machine shared with other jobs).", "",
+                "| method | spp | RMSE (± σ) | wall s | CPU s | equal-time ratio, wall | equal-time ratio, CPU |",
+                "|---|---:|---:|---:|---:|---:|---:|"]
+        results = scene["results"]
+        for method, rows in results.items():
+            for spp, e in sorted(rows.items(), key=lambda kv: int(kv[0])):
+                ratios = scene["ratios"].get(method)
+                cells = (f"{ratios['wall'][spp]:.2f} | {ratios['cpu'][spp]:.2f}" if ratios else "– | –")
+                out.append(f"| {method} | {spp} | {e['rmse']:.4f} ± {e['rmse_sd']:.4f} | {e['wall']:.3f} | "
+                           f"{e['cpu']:.3f} | {cells} |")
+        out.append("")
+        plain = results["plain"]
+        for preset in presets:
+            rows = results[preset]
+            common = sorted(set(rows) & set(plain), key=int)
+            cost = [rows[s]["cpu"] / plain[s]["cpu"] for s in common if int(s) >= 16]
+            entry = table.setdefault(preset, {"cost": [], "ratio": [], "scenes": []})
+            entry["cost"].append(sum(cost) / len(cost) if cost else float("nan"))
+            entry["ratio"].append(scene["ratios"][preset]["cpu"]["16"])
+            entry["scenes"].append(name)
+    plot = os.path.join(docs, "colormap", "equal-time.svg")
+    os.makedirs(os.path.dirname(plot), exist_ok=True)
+    colours = ["#c33", "#27c", "#2a2", "#a5c", "#e80", "#666"]
+    panels = []
+    for name, scene in scenes.items():
+        for clock, word in (("cpu", "CPU seconds (all threads)"), ("wall", "wall seconds")):
+            series = []
+            times = []
+            for colour, (method, rows) in zip(colours, scene["results"].items()):
+                spps = sorted(rows, key=int)
+                xs = [max(rows[s][clock], 1e-4) for s in spps]
+                times += xs
+                series.append({"name": method, "xs": xs, "ys": [rows[s]["rmse"] for s in spps], "colour": colour})
+            ticks = svg_plot.log_ticks(min(times) * 0.8, max(times) * 1.25)
+            panels.append({"title": f"{name}: RMSE vs {clock} time", "xs": [min(times) * 0.8] + ticks +
+                           [max(times) * 1.25], "xticks": ticks, "logx": True, "logy": True, "xlabel": word,
+                           "series": series})
+    svg_plot.figure(panels, plot, columns=2, caption=f"Cycles, {size}: RMSE against render time, log-log")
+    out += ["![RMSE against render time](colormap/equal-time.svg)", "",
+            "Presets (the panel's table, written to `addon/penumbra/colormap/filter_quality.json`): time = a "
+            "filtered render's CPU seconds over the plain ramp's at the same spp (mean over 16 spp and up, where "
+            "the per-sample cost dominates), error = the CPU equal-time ratio at 16 spp; means over the scenes run.",
+            "", "| preset | time per sample | equal-time ratio at 16 spp |", "|---|---:|---:|"]
+    summary = {}
+    for preset, entry in table.items():
+        summary[preset] = {"cost": sum(entry["cost"]) / len(entry["cost"]),
+                           "ratio": sum(entry["ratio"]) / len(entry["ratio"]), "scenes": entry["scenes"]}
+        out.append(f"| {preset} | {summary[preset]['cost']:.2f}× | {summary[preset]['ratio']:.2f} |")
+    with open(QUALITY_TABLE + ".tmp", "w") as f:
+        json.dump({"about": "written by bench/colormap_benchmark.py (equal-time section): cost = CPU time per "
+                   "render over the plain ramp's at the same spp (16 spp and up), ratio = equal-time RMSE over "
+                   "the plain ramp's at 16 spp (CPU seconds); means over `scenes`",
+                   "blender": data["blender"], "size": data["size"], "presets": summary}, f, indent=1)
+    os.replace(QUALITY_TABLE + ".tmp", QUALITY_TABLE)
+    return out + [""]
+
+
 def main():
     global lines
+    if os.environ.get("PENUMBRA_BENCH_SECTIONS") == "equal_time":
+        # The equal-time sweep alone, its section replaced in the published page.
+        from bench.helpers.doc_section import write_section
+        section = bench_equal_time()
+        write_section(os.path.join(DOCS, "colormap-benchmark.md"), EQUAL_TIME_MARKER, "\n".join(section) + "\n")
+        print("\n".join(section))
+        return
     # Quick mode checks the sweep's harness only (its page is not the published one).
-    sections = (bench_render,) if QUICK else (bench_build, bench_accuracy, bench_height, bench_footprint, bench_render)
+    sections = (bench_render,) if QUICK else (bench_build, bench_accuracy, bench_height, bench_footprint, bench_render,
+                                              bench_equal_time)
     for section in sections:
         print(f"colormap benchmark: {section.__name__}", flush=True)
         lines += section()

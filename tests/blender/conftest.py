@@ -32,6 +32,7 @@ def pytest_report_header(config):
 # cost would triple.
 ONLY_IN = {"test_architecture_calls.py": (4, 5),
            "test_colormap_criteria.py": (4, 5),
+           "test_colormap_equal_time.py": (4, 5),
            "test_visibility_criteria.py": (4, 5),
            "test_lights_eevee.py": (5, 2)}  # EEVEE Next after gpu.init(); 3.4 runs test_lights_eevee_window.py
 

@@ -6,9 +6,9 @@ sidebar section is panel.py (registered by ../panels.py)."""
 if "bpy" in locals():
     import importlib
     for _name in ("interface", "settings", "ramp", "node_groups", "noise_maths", "table_image", "node_builder",
-                  "lookup_layout", "noise_statistics", "noise_model", "noise_nodes", "filtered_ramp", "footprint",
-                  "noise_filter", "microsurface", "height_ramp", "slope_ramp", "sample_count", "material",
-                  "surface_filter", "operators", "panel"):
+                  "lookup_layout", "filter_quality", "noise_statistics", "noise_model", "noise_nodes",
+                  "filtered_ramp", "footprint", "point_footprint", "point_filter", "noise_filter", "microsurface",
+                  "height_ramp", "slope_ramp", "sample_count", "material", "surface_filter", "operators", "panel"):
         if _name in locals():
             importlib.reload(locals()[_name])
 
@@ -16,8 +16,9 @@ import bpy  # noqa: E402
 
 # In the order they import each other (a reload goes the same way).
 from . import interface, settings, ramp, node_groups, noise_maths, table_image, node_builder  # noqa: E402,F401
-from . import lookup_layout, noise_statistics, noise_model, noise_nodes  # noqa: E402,F401
-from . import filtered_ramp, footprint, noise_filter, microsurface, height_ramp, slope_ramp  # noqa: E402,F401
+from . import lookup_layout, filter_quality, noise_statistics, noise_model, noise_nodes  # noqa: E402,F401
+from . import filtered_ramp, footprint, point_footprint, point_filter, noise_filter  # noqa: E402,F401
+from . import microsurface, height_ramp, slope_ramp  # noqa: E402,F401
 from . import sample_count, material, surface_filter, operators, panel  # noqa: E402,F401
 
 # Registered before the scene's `penumbra` group, which points at SceneSettings.

@@ -6,9 +6,11 @@ from .lookup_layout import lookup_uv
 from .node_builder import Builder, new_group, zero_after
 from .node_groups import FILTERED_RAMP
 from .noise_maths import MIXTURE_COMPONENTS
+from .point_filter import select
 
 
-def filtered_ramp_group(image, spec, name=FILTERED_RAMP, mixture=False):
+def filtered_ramp_group(image, spec, name=FILTERED_RAMP, mixture=False, single_fetch=False, point=False,
+                        with_mixture=True):
     """Mean, Sigma -> Color, Alpha from `image` (a lookup with `spec`: width,
     height, sigma_max, mean_min, mean_max, sigma_spacing).
 
@@ -17,17 +19,40 @@ def filtered_ramp_group(image, spec, name=FILTERED_RAMP, mixture=False):
     Gaussians N(Mean + δ_k, Sigma² + ε_k), (δ_k, ε_k) for k = 1..3 the
     vectors' components and, the four having the mixture's mean Mean and
     variance Sigma², δ_4 = −(δ_1 + δ_2 + δ_3), ε_4 = −(ε_1 + ε_2 + ε_3) −
-    Σ_k δ_k². Left at zero, that is the one Gaussian N(Mean, Sigma²)."""
+    Σ_k δ_k². Left at zero, that is the one Gaussian N(Mean, Sigma²).
+
+    point=True (with mixture=True): one more input, Mixture, the Noise
+    Filter's: the mixture where it is 1 (one sample), the one Gaussian
+    N(Mean, Sigma²) where it is 0, chosen by a Mix that Cycles folds
+    (point_filter.select). with_mixture=False: the same inputs, the one
+    Gaussian only (the group for more than one sample, sample_count.py).
+
+    single_fetch=True (the one Gaussian): one Image Texture set to Linear
+    instead of four Closest fetches interpolated in nodes: the same numbers
+    in Cycles (bilinear between texel centres, no mipmaps) for about a
+    sixth of the nodes, but EEVEE would read it through mipmaps (see
+    node_builder.Builder.texel_fetch), so the bake uses it for Cycles only."""
     inputs = [("Mean", "NodeSocketFloat", 0.5), ("Sigma", "NodeSocketFloat", 0.0)]
     if mixture:
         inputs += [("Offsets", "NodeSocketVector", (0.0, 0.0, 0.0)), ("Variances", "NodeSocketVector", (0.0, 0.0, 0.0))]
+    if mixture and point:
+        inputs += [("Mixture", "NodeSocketFloat", 0.0)]
     group, gin, gout = new_group(name, inputs, [("Color", "NodeSocketColor"), ("Alpha", "NodeSocketFloat")])
     b = Builder(group)
     mean, sigma = gin.outputs["Mean"], gin.outputs["Sigma"]
-    if not mixture:
+    if single_fetch and (point or not mixture):
+        node = b.texel_fetch(image, *lookup_uv(b, mean, sigma, spec))
+        node.interpolation = "Linear"
+        color, alpha = node.outputs["Color"], node.outputs["Alpha"]
+    elif point or not mixture:
         color, alpha = b.image(image, *lookup_uv(b, mean, sigma, spec))
-    else:
-        color, alpha = _mixture_lookup(b, image, spec, mean, sigma, gin.outputs["Offsets"], gin.outputs["Variances"])
+    if mixture and with_mixture:
+        mixed = _mixture_lookup(b, image, spec, mean, sigma, gin.outputs["Offsets"], gin.outputs["Variances"])
+        if point:
+            which = gin.outputs["Mixture"]
+            color, alpha = select(b, which, color, mixed[0], "RGBA"), select(b, which, alpha, mixed[1])
+        else:
+            color, alpha = mixed
     b.links.new(color, gout.inputs["Color"])
     b.links.new(alpha, gout.inputs["Alpha"])
     group["penumbra_lookup"] = dict(spec, image=image.name)

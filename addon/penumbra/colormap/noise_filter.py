@@ -1,15 +1,16 @@
 """The "Penumbra Noise Filter" group (one per noise setting): Vector, Scale,
 Units per World, Minor, Major, Axis U, Axis V, Samples, W -> Mean, Sigma,
-Offsets, Variances: the octave-wise filter of the noise with 16 taps (8 or
-4 in EEVEE for costly noises, noise_maths.tap_count) over the sample's
+Offsets, Variances: the octave-wise filter of the noise over the sample's
 share of the footprint, as one Gaussian (Mean, Sigma) and as a mixture of
-four (Offsets, Variances)."""
+four (Offsets, Variances). With 16 taps (8 or 4 in EEVEE for costly noises,
+noise_maths.tap_count), or with one evaluation at the sample
+(point_filter.py; Offsets and Variances then stay zero)."""
 
 import math
 
 import bpy
 
-from . import noise_nodes
+from . import noise_nodes, point_filter
 from .node_builder import Builder, new_group, zero_after
 from .node_groups import NOISE_FILTER
 from .noise_maths import MIXTURE_COMPONENTS, TAP_COUNT, TAP_COUNTS, major_taps
@@ -26,7 +27,8 @@ NOISE_FILTER_VERSION = 4
 KERNEL_SHARE_EXPONENT = 0.5
 
 
-def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_COUNT):
+def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_COUNT, analytic_octaves=0,
+                       point=False, with_taps=True):
     """Vector, Scale, Units per World, Minor, Major, Axis U, Axis V, Samples,
     W -> Mean, Sigma, Offsets, Variances: the octave-wise filter of the noise
     `model` (noise_maths.NoiseModel: offset + Σ c_i (Fac_i − 0.5), Fac_i a
@@ -58,12 +60,25 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_CO
     Offsets and Variances describe the taps in four equal groups k (taps
     next to each other along M, both sides): δ_k = the group's mean of s_t −
     their average, ε_k = the group's spread − all the taps' spread, for
-    k = 1..3 (filtered_ramp_group(mixture=True) reads them)."""
+    k = 1..3 (filtered_ramp_group(mixture=True) reads them).
+
+    point=True: above one sample, one evaluation of each octave at the
+    sample instead, the finest `analytic_octaves` left out and carried as
+    variance (point_filter.point_estimate, with the inputs Point Minor and
+    Point Major of point_footprint.py); at one sample the taps as above.
+    The output Mixture is 1 at one sample, else 0: a number fixed for the
+    whole render (Samples is set by its driver), so Cycles folds the choice
+    and removes the branch it does not take (point_filter.select).
+    with_taps=False (point only): the same interface without the taps, for
+    more than one sample (Mixture, Offsets and Variances stay 0)."""
     coefficients, offset, lacunarity = model.coefficients, model.offset, model.lacunarity
     if taps not in TAP_COUNTS:
         raise ValueError(f"taps must be one of {TAP_COUNTS}, not {taps}")
+    if analytic_octaves and not point:
+        raise ValueError("only the one-evaluation filter (point=True) leaves octaves out")
     key = (f"{model.dimensions} " + "/".join(f"{c:.6g}" for c in coefficients) +
-           f" o{offset:g} l{lacunarity:g} d{model.distortion:g} w{model.w} k{filter_stddev_px:.4g} t{taps}")
+           f" o{offset:g} l{lacunarity:g} d{model.distortion:g} w{model.w} k{filter_stddev_px:.4g} t{taps}" +
+           (f" p{analytic_octaves}" if point else "") + ("" if with_taps else " only"))
     name = f"{NOISE_FILTER} ({key} spp)"
     group = bpy.data.node_groups.get(name)
     if group is not None and group.get("penumbra_version") == NOISE_FILTER_VERSION:
@@ -77,14 +92,26 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_CO
                                         ("Axis U", "NodeSocketVector", (0.0, 0.0, 0.0)),
                                         ("Axis V", "NodeSocketVector", (0.0, 0.0, 0.0)),
                                         ("Samples", "NodeSocketFloat", 1.0),
-                                        ("W", "NodeSocketFloat", 0.0)],
+                                        ("W", "NodeSocketFloat", 0.0)] +
+                                 ([("Point Minor", "NodeSocketFloat", 0.0), ("Point Major", "NodeSocketFloat", 0.0)]
+                                  if point else []),
                                  [("Mean", "NodeSocketFloat"), ("Sigma", "NodeSocketFloat"),
-                                  ("Offsets", "NodeSocketVector"), ("Variances", "NodeSocketVector")])
+                                  ("Offsets", "NodeSocketVector"), ("Variances", "NodeSocketVector")] +
+                                 ([("Mixture", "NodeSocketFloat")] if point else []))
     group["penumbra_octave_coefficients"] = list(coefficients)
     group["penumbra_octave_offset"] = offset
     group["penumbra_taps"] = taps
+    group["penumbra_point"] = point
+    group["penumbra_analytic_octaves"] = analytic_octaves
     b = Builder(group)
     share = _kernel_share(b, gin.outputs["Samples"])
+    if point and not with_taps:
+        mean, variance = point_filter.point_estimate(b, gin, model, table["total_var"], filter_stddev_px, share,
+                                                     analytic_octaves)
+        b.connect(mean, gout.inputs["Mean"])
+        b.links.new(b.math("SQRT", b.math("MAXIMUM", variance, 0.0)), gout.inputs["Sigma"])
+        group["penumbra_version"] = NOISE_FILTER_VERSION
+        return group
     log2_s, v = _footprint_table_coordinates(b, gin, table, filter_stddev_px, share)
     variance, weights = 0.0, []       # weights: c_i g_i, the shrunk octave's weight in the mean
     for i, c in enumerate(coefficients):
@@ -94,9 +121,17 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_CO
         weights.append(b.math("MULTIPLY", g, c))
         variance = b.math("MULTIPLY_ADD", term, table["total_var"] * c * c, variance)
     mean, spread, offsets, variances = _tap_groups(b, gin, model, weights, filter_stddev_px, share, taps)
-    b.connect(b.math("ADD", mean, offset), gout.inputs["Mean"])
-    variance = b.math("ADD", variance, spread)
-    b.links.new(b.math("SQRT", b.math("MAXIMUM", variance, 0.0)), gout.inputs["Sigma"])
+    mean = b.math("ADD", mean, offset)
+    sigma = b.math("SQRT", b.math("MAXIMUM", b.math("ADD", variance, spread), 0.0))
+    if point:
+        one_sample = b.math("LESS_THAN", gin.outputs["Samples"], 1.5)
+        point_mean, point_variance = point_filter.point_estimate(
+            b, gin, model, table["total_var"], filter_stddev_px, share, analytic_octaves)
+        mean = point_filter.select(b, one_sample, point_mean, mean)
+        sigma = point_filter.select(b, one_sample, b.math("SQRT", b.math("MAXIMUM", point_variance, 0.0)), sigma)
+        b.links.new(one_sample, gout.inputs["Mixture"])
+    b.connect(mean, gout.inputs["Mean"])
+    b.links.new(sigma, gout.inputs["Sigma"])
     b.links.new(offsets, gout.inputs["Offsets"])
     b.links.new(variances, gout.inputs["Variances"])
     group["penumbra_version"] = NOISE_FILTER_VERSION

@@ -174,8 +174,24 @@ def major_taps(count):
     return tuple(q / rms for q in quantiles)
 
 
+# One octave's correlation length at Scale 1 (noise units), as a Gaussian
+# ρ(d) = exp(−d²/2l²): with it 1 − q = ((1 + 2s²/l²)(1 + 2s²e²/l²))^(−1/2)
+# matches the measured q(s, e) table of noise_statistics.json to 0.012 RMS
+# (0.04 at most) in 4.5 and 3.4 (tests/python/colormap/test_point_filter.py).
+# The one-evaluation filter (point_filter.py) needs no table with it.
+OCTAVE_CORRELATION_LENGTH = 0.426
+
 MAJOR_TAPS = major_taps(8)
 TAP_COUNT = 2 * len(MAJOR_TAPS)
+
+
+def point_shrinkage(minor, major, octave, lacunarity):
+    """g = E_kernel[ρ] of octave `octave` under a Gaussian kernel of standard
+    deviations (minor, major) in noise units at Scale 1: the weight the
+    one-evaluation filter gives its value (point_filter.py's nodes compute
+    the same); 1 − g² is the variance it carries."""
+    growth = (lacunarity ** octave / OCTAVE_CORRELATION_LENGTH) ** 2
+    return ((1.0 + minor * minor * growth) * (1.0 + major * major * growth)) ** -0.5
 
 
 def noise_evaluations_per_tap(model):

@@ -14,8 +14,8 @@ import tempfile
 import bpy
 import numpy as np
 
-from . import filtered_ramp, footprint, noise_filter, noise_maths, noise_model, noise_statistics
-from . import node_groups, ramp as ramp_io, sample_count
+from . import filter_quality, filtered_ramp, footprint, noise_filter, noise_maths, noise_model, noise_statistics
+from . import node_groups, point_footprint, ramp as ramp_io, sample_count
 from .material import BakeError, Rollback, editable_material
 from .surface_filter import filters_of
 from .. import color, modal_job, native, node_links, world
@@ -205,9 +205,15 @@ class BakePlan:
         if warning:
             self.warnings.append(warning)
         self.filter_stddev = noise_statistics.pixel_filter_stddev(context.scene)
-        self.taps = noise_maths.tap_count(model, context.scene.render.engine)
-        if self.taps < noise_maths.TAP_COUNT:
-            self.warnings.append(f"EEVEE: the noise filter uses {self.taps} taps, not {noise_maths.TAP_COUNT} "
+        self.quality_key = self.settings.filter_quality
+        self.quality = filter_quality.quality(self.quality_key)
+        # The one-evaluation presets keep the 16 taps for one sample (the
+        # per-sample verdicts of issue #12 hold there; docs/colormap.md).
+        self.point = self.quality.taps == 1
+        wanted = noise_maths.TAP_COUNT if self.point else self.quality.taps
+        self.taps = min(wanted, noise_maths.tap_count(model, context.scene.render.engine))
+        if self.taps < wanted:
+            self.warnings.append(f"EEVEE: the noise filter uses {self.taps} taps, not {wanted} "
                                  f"({noise_maths.noise_evaluations_per_tap(model)} Noise evaluations per tap: "
                                  "Detail and Distortion), so that EEVEE can compile the material; bake again "
                                  "after switching to Cycles for the full filter")
@@ -306,12 +312,22 @@ class BakePlan:
             return {"image": image, "path": path, "group": group, "node": None}
         tree = self.material.node_tree
         ramp = self.node
-        group = filtered_ramp.filtered_ramp_group(image, self.spec, mixture=self.noise is not None)
+        point = self.noise is not None and self.point
+        mixture = self.noise is not None and (self.quality.mixture or point)
+        single_fetch = point and self.scene.render.engine == "CYCLES"
+        group = filtered_ramp.filtered_ramp_group(image, self.spec, mixture=mixture, single_fetch=single_fetch,
+                                                  point=point)
+        single = filtered_ramp.filtered_ramp_group(image, self.spec, mixture=mixture, single_fetch=single_fetch,
+                                                   point=point, with_mixture=False) if point else None
         group_node = tree.nodes.new("ShaderNodeGroup")
         group_node.node_tree = group
         group_node.name = group_node.label = node_groups.FILTERED_RAMP
         group_node.location = ramp.location
         group_node["penumbra_original_ramp"] = ramp.name
+        if single is not None:      # swapped by the sample count, as the Noise Filter's (sample_count.fit_group)
+            sample_count.remember_group(group_node, sample_count.GROUP_AT_ONE_SAMPLE, group)
+            sample_count.remember_group(group_node, sample_count.GROUP_ABOVE_ONE_SAMPLE, single)
+            sample_count.fit_group(group_node, self.scene)
         # Outputs: whatever the ramp fed now comes from the group.
         for out_name in ("Color", "Alpha"):
             targets = [link.to_socket for link in ramp.outputs[out_name].links]
@@ -331,29 +347,51 @@ class BakePlan:
         tree.nodes.active = group_node
         return {"image": image, "path": path, "group": group, "node": group_node}
 
+    def _footprint_node(self, tree, group, name, location):
+        """A footprint group's node with the camera's pixel size and type."""
+        node = tree.nodes.new("ShaderNodeGroup")
+        node.node_tree = group
+        node.name = node.label = name
+        node.location = location
+        node.inputs["Pixel Size"].default_value = self.pixel_size or 0.0
+        node.inputs["Orthographic"].default_value = 1.0 if self.orthographic else 0.0
+        return node
+
     def _wire_noise(self, tree, group_node, source):
         octave_image, table = noise_statistics.octave_image(self.folder)
         filter_node = tree.nodes.new("ShaderNodeGroup")
         filter_node.node_tree = noise_filter.noise_filter_group(octave_image, table, self.noise_model,
-                                                                self.filter_stddev, self.taps)
+                                                                self.filter_stddev, self.taps,
+                                                                self.quality.analytic_octaves, self.point)
+        filter_node[filter_quality.NODE_PROPERTY] = self.quality_key
         eevee_taps = noise_maths.tap_count(self.noise_model, "BLENDER_EEVEE")
         if eevee_taps < self.taps:
             # Too costly for EEVEE at this many taps: keep a smaller group
             # for it, which the render_init handler swaps in.
-            filter_node[sample_count.GROUP_FOR_CYCLES] = filter_node.node_tree
-            filter_node[sample_count.GROUP_FOR_EEVEE] = noise_filter.noise_filter_group(
-                octave_image, table, self.noise_model, self.filter_stddev, eevee_taps)
+            sample_count.remember_group(filter_node, sample_count.GROUP_FOR_CYCLES, filter_node.node_tree)
+            eevee = noise_filter.noise_filter_group(octave_image, table, self.noise_model, self.filter_stddev,
+                                                    eevee_taps, self.quality.analytic_octaves, self.point)
+            sample_count.remember_group(filter_node, sample_count.GROUP_FOR_EEVEE, eevee)
+        if self.point:
+            sample_count.remember_group(filter_node, sample_count.GROUP_AT_ONE_SAMPLE, filter_node.node_tree)
+            above = noise_filter.noise_filter_group(octave_image, table, self.noise_model, self.filter_stddev,
+                                                    self.taps, self.quality.analytic_octaves, point=True,
+                                                    with_taps=False)
+            sample_count.remember_group(filter_node, sample_count.GROUP_ABOVE_ONE_SAMPLE, above)
+            sample_count.fit_group(filter_node, self.scene)
         sample_count.drive_samples(filter_node, self.scene)
         filter_node.name = filter_node.label = "Penumbra Noise Filter"
         filter_node.location = (group_node.location.x - 220, group_node.location.y + 40)
-        footprint_node = tree.nodes.new("ShaderNodeGroup")
-        footprint_node.node_tree = footprint.footprint_group()
-        footprint_node.name = footprint_node.label = node_groups.FOOTPRINT
-        footprint_node.location = (group_node.location.x - 440, group_node.location.y - 120)
-        footprint_node.inputs["Pixel Size"].default_value = self.pixel_size or 0.0
-        footprint_node.inputs["Orthographic"].default_value = 1.0 if self.orthographic else 0.0
+        footprint_node = self._footprint_node(tree, footprint.footprint_group(), node_groups.FOOTPRINT,
+                                              (group_node.location.x - 440, group_node.location.y - 120))
         footprint_node.inputs["Raster Offset X"].default_value = self.raster_offset[0]
         footprint_node.inputs["Raster Offset Y"].default_value = self.raster_offset[1]
+        if self.point:      # the one-evaluation filter's own, cheap footprint
+            point_node = self._footprint_node(tree, point_footprint.point_footprint_group(),
+                                              node_groups.POINT_FOOTPRINT,
+                                              (group_node.location.x - 440, group_node.location.y - 320))
+            for name in ("Minor", "Major"):
+                tree.links.new(point_node.outputs[name], filter_node.inputs["Point " + name])
         if self.noise_model.vector_from is not None:
             tree.links.new(self.noise_model.vector_from, filter_node.inputs["Vector"])
         else:  # an unlinked texture vector means Generated coordinates
@@ -372,8 +410,9 @@ class BakePlan:
             elif value is not None:
                 filter_node.inputs[name].default_value = value
         filter_node.inputs["Units per World"].default_value = self.coordinate_scale
-        for name in ("Mean", "Sigma", "Offsets", "Variances"):
-            tree.links.new(filter_node.outputs[name], group_node.inputs[name])
+        for name in ("Mean", "Sigma", "Offsets", "Variances", "Mixture"):
+            if name in group_node.inputs:  # one Gaussian: no mixture inputs
+                tree.links.new(filter_node.outputs[name], group_node.inputs[name])
 
 
 class _LookupFiles:

@@ -7,7 +7,8 @@ written, in sub-panels."""
 import bpy
 
 from .. import sidebar
-from . import operators, surface_filter
+from . import filter_quality, operators, sample_count, surface_filter
+from .material import active_material
 
 
 def _split(layout):
@@ -62,6 +63,36 @@ class PENUMBRA_PT_colormap_lookup(_SubPanel, bpy.types.Panel):
         layout.prop(s, "sigma_spacing", text="Spacing")
 
 
+class PENUMBRA_PT_colormap_quality(_SubPanel, bpy.types.Panel):
+    bl_label = "Filter Quality"
+
+    def draw(self, context):
+        layout = self.layout
+        s = _settings(context)
+        layout.prop(s, "filter_quality", text="")
+        measured = filter_quality.measured()
+        column = layout.column(align=True)
+        # Time: a filtered sample's over a plain one's; error: RMSE over the
+        # plain ramp's at equal render time, 16 spp (both from the benchmark).
+        split = column.split(factor=0.55)
+        split.label(text="Preset")
+        split.label(text="Time, Error")
+        for key, quality in filter_quality.QUALITIES.items():
+            numbers = measured.get(key)
+            split = column.split(factor=0.55)
+            split.label(text=("› " if key == s.filter_quality else "") + quality.label)
+            split.label(text=f"{numbers['cost']:.2g}× {numbers['ratio']:.2f}" if numbers else "–")
+        material = active_material(context)
+        baked = [filter_quality.baked_quality(n) for n in sample_count.noise_filter_nodes(material)] \
+            if material is not None and material.node_tree is not None else []
+        if any(key != s.filter_quality for key in baked):
+            box = layout.box()
+            box.alert = True
+            name = filter_quality.QUALITIES.get(baked[0], filter_quality.QUALITIES[filter_quality.LEGACY]).label
+            box.label(text=f"Baked at {name}", icon="ERROR")
+            box.label(text="Restore, bake again to apply")
+
+
 class PENUMBRA_PT_colormap_range(_SubPanel, bpy.types.Panel):
     bl_label = "Range"
     bl_options = {"DEFAULT_CLOSED"}
@@ -90,5 +121,5 @@ class PENUMBRA_PT_colormap_output(_SubPanel, bpy.types.Panel):
         layout.column(heading="Also Write").prop(s, "write_png", text="16-bit PNG")
 
 
-classes = (PENUMBRA_PT_colormap, PENUMBRA_PT_colormap_lookup, PENUMBRA_PT_colormap_range,
-           PENUMBRA_PT_colormap_output)
+classes = (PENUMBRA_PT_colormap, PENUMBRA_PT_colormap_quality, PENUMBRA_PT_colormap_lookup,
+           PENUMBRA_PT_colormap_range, PENUMBRA_PT_colormap_output)

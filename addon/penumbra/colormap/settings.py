@@ -2,6 +2,7 @@
 
 import bpy
 from ..core_settings import limits
+from . import filter_quality
 
 
 class ColormapSceneSettings(bpy.types.PropertyGroup):
@@ -35,6 +36,10 @@ class ColormapSceneSettings(bpy.types.PropertyGroup):
         name="Folder", default="//penumbra_luts/", subtype="DIR_PATH",
         description="Where lookup images are written (next to the .blend by default; the temporary "
                     "folder while the file is unsaved)")
+    filter_quality: bpy.props.EnumProperty(
+        name="Filter Quality", items=filter_quality.enum_items(), default=filter_quality.DEFAULT,
+        description="How the Noise Filter of the next bake spends its time: taps per sample, octaves carried "
+                    "as variance, one Gaussian or a mixture (a baked material keeps its own until baked again)")
     write_png: bpy.props.BoolProperty(
         name="Also 16-bit PNG", default=False,
         description="Write a 16-bit PNG copy beside the float EXR (values clamped to [0, 1])")

@@ -50,6 +50,7 @@ def test_ramp_evaluation_matches_blenders_own_in_every_mode(addon, interpolation
 
 
 def test_bake_replaces_a_noise_driven_ramp_and_keeps_the_original(addon, tmp_path):
+    addon.penumbra.colormap.filter_quality = "TAPS_16_MIXTURE"   # the 16 taps' mixture at every sample count
     addon.penumbra.colormap.output_folder = str(tmp_path)
     addon.penumbra.colormap.lut_width = 64
     addon.penumbra.colormap.lut_height = 32

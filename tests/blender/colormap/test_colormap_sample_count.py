@@ -116,6 +116,7 @@ def test_eevee_gets_a_noise_filter_it_can_compile(addon, tmp_path):
     ran llvmpipe out of 24 GiB): baked for EEVEE, a costly noise gets fewer
     taps, at most EEVEE_NOISE_BUDGET Noise Textures; a cheap one, and any
     noise baked for Cycles, keeps all 16."""
+    addon.penumbra.colormap.filter_quality = "TAPS_16_MIXTURE"   # the taps at every sample count
     addon.penumbra.colormap.output_folder = str(tmp_path)
     material, ramp, emission, camera = _render_scene(addon, 70.0)
     noise = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeTexNoise")
@@ -143,6 +144,7 @@ def test_the_render_swaps_in_the_group_baked_for_its_engine(addon, tmp_path):
     """Baked for Cycles, a noise too costly for EEVEE at 16 taps also gets a
     4-tap group; a render with EEVEE (the render_init handler) swaps it in,
     one with Cycles back, links, driver and values kept."""
+    addon.penumbra.colormap.filter_quality = "TAPS_16_MIXTURE"   # the taps at every sample count
     addon.penumbra.colormap.output_folder = str(tmp_path)
     material, ramp, emission, camera = _render_scene(addon, 70.0)
     addon.render.resolution_x, addon.render.resolution_y = 8, 6

@@ -1,0 +1,137 @@
+"""Equal-time comparison of the plain ColorRamp and Penumbra's filtered ramp
+in Cycles, in one Blender process (issue #25): the benchmark plane, one
+material per method (the plain ramp and one baked copy per filter quality),
+renders timed as bpy.ops.render.render after one untimed warm-up per method,
+methods interleaved, the median of the repeats' seconds (wall and CPU of
+this process) and the mean of their RMSEs against a high-sample plain
+render. Used by bench/colormap_benchmark.py and
+tests/blender/colormap/test_colormap_equal_time.py. Needs bpy and the add-on."""
+
+import math
+import os
+import statistics
+import time
+
+import bpy
+import numpy as np
+
+PLAIN = "plain"
+
+
+def new_plane_scene(size, threads=2, **plane_options):
+    """Factory settings, Cycles on the CPU (no denoising, no adaptive
+    sampling), the benchmark plane (colormap_scene.noise_ramp_plane,
+    Roughness 0.5 unless given) at `size`. Returns (scene, plane, material)."""
+    from bench.helpers.paths import use_addon
+    use_addon()                 # examples/scenes: colormap_scene
+    import colormap_scene
+    from bench.blender_scripts.colormap_render import new_scene   # factory settings, size, EXR, black world
+    scene = new_scene(size, threads)
+    if not hasattr(bpy.types.Scene, "penumbra"):    # a batch script that only imported the add-on
+        import penumbra
+        penumbra.register()
+        scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.use_denoising = False
+    scene.cycles.use_adaptive_sampling = False
+    scene.cycles.use_animated_seed = False
+    plane_options.setdefault("roughness", 0.5)
+    plane, material, _ramp, _emission, _camera = colormap_scene.noise_ramp_plane(**plane_options)
+    return scene, plane, material
+
+
+def bake_quality(scene, plane, material, quality, folder):
+    """A copy of the (unbaked) `material` baked with the filter preset
+    `quality`; returns it."""
+    baked = material.copy()
+    baked.name = f"{material.name} {quality}"
+    plane.material_slots[0].material = baked
+    bpy.context.view_layer.objects.active = plane
+    ramp = next(n for n in baked.node_tree.nodes if n.bl_idname == "ShaderNodeValToRGB")
+    baked.node_tree.nodes.active = ramp
+    scene.penumbra.colormap.filter_quality = quality
+    scene.penumbra.colormap.output_folder = folder
+    result = bpy.ops.penumbra.bake_colormap_lut()
+    plane.material_slots[0].material = material
+    if result != {"FINISHED"}:
+        raise RuntimeError(f"the bake with quality {quality} failed: {result}")
+    return baked
+
+
+class Renderer:
+    """Renders the plane with one of its materials at a sample count and seed."""
+
+    def __init__(self, scene, plane, materials, folder):
+        self.scene, self.plane, self.materials, self.folder = scene, plane, materials, folder
+        self.count = 0
+
+    def render(self, method, spp, seed):
+        """(image, wall seconds, CPU seconds of this process)."""
+        from penumbra import native
+        self.plane.material_slots[0].material = self.materials[method]
+        self.scene.cycles.samples = spp
+        self.scene.cycles.seed = seed
+        bpy.context.view_layer.update()          # the Samples driver reads the new count
+        self.scene.frame_set(self.scene.frame_current)
+        self.count += 1
+        path = os.path.join(self.folder, f"render_{self.count}.exr")
+        self.scene.render.filepath = path
+        started, cpu = time.perf_counter(), time.process_time()
+        bpy.ops.render.render(write_still=True)
+        wall, cpu = time.perf_counter() - started, time.process_time() - cpu
+        image = native.require().image.read(path)
+        os.remove(path)
+        return image, wall, cpu
+
+
+def rmse(image, reference):
+    return float(np.sqrt(((image[..., :3] - reference[..., :3]) ** 2).mean()))
+
+
+def sweep(renderer, reference, counts, repeats=3, seed0=0):
+    """{method: {spp: {"rmse", "rmse_sd", "wall", "cpu"}}} for counts
+    {method: [spp, ...]}: after one warm-up render per method, for each
+    repeat every (method, spp) in turn (interleaved), seed seed0 + repeat;
+    times are medians, errors the mean (and standard deviation) over the
+    repeats' seeds."""
+    for method in counts:
+        renderer.render(method, 1, seed0)
+    raw = {(m, s): [] for m, spps in counts.items() for s in spps}
+    for repeat in range(repeats):
+        for method, spps in counts.items():
+            for spp in spps:
+                image, wall, cpu = renderer.render(method, spp, seed0 + repeat)
+                raw[(method, spp)].append((rmse(image, reference), wall, cpu))
+    out = {m: {} for m in counts}
+    for (method, spp), rows in raw.items():
+        errors = [r[0] for r in rows]
+        out[method][spp] = {"rmse": statistics.fmean(errors),
+                            "rmse_sd": statistics.stdev(errors) if len(errors) > 1 else 0.0,
+                            "wall": statistics.median(r[1] for r in rows),
+                            "cpu": statistics.median(r[2] for r in rows)}
+    return out
+
+
+def plain_error_at(plain, seconds, clock):
+    """The plain ramp's RMSE at `seconds` of `clock` ("wall" or "cpu"), read
+    log-log off its curve {spp: entry} (linear between its points in log
+    time and log error, clamped at its ends)."""
+    points = sorted((max(e[clock], 1e-9), e["rmse"]) for e in plain.values())
+    times = [math.log(t) for t, _ in points]
+    errors = [math.log(r) for _, r in points]
+    x = math.log(max(seconds, 1e-9))
+    # The curve's times can be out of order at the noisy low end: np.interp
+    # needs them increasing, and sorted() above made them so.
+    return float(math.exp(np.interp(x, times, errors)))
+
+
+def equal_time_ratios(results, method, clock):
+    """{spp: RMSE of `method` / the plain ramp's at the same time}."""
+    plain = results[PLAIN]
+    return {spp: e["rmse"] / plain_error_at(plain, e[clock], clock) for spp, e in results[method].items()}
+
+
+def reference_image(renderer, spp, seed=1000):
+    image, _, _ = renderer.render(PLAIN, spp, seed)
+    return image

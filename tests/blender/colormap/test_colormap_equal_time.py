@@ -1,0 +1,60 @@
+"""Issue #25's equal-time check (one Blender, conftest.ONLY_IN): the
+benchmark plane at 96×54 in Cycles, the plain ramp and two Noise Filter
+presets rendered interleaved in one process (bench/helpers/
+colormap_equal_time.py), CPU seconds, median of 3, the plain ramp's RMSE
+read log-log off its own 1–256 spp curve at each filtered render's time.
+
+The 16-tap preset of the previous versions must fail the issue's goal
+(≤ 0.7× the plain ramp's error at equal time) by more than the 20 % margin.
+The default preset does not meet 0.7× either (docs/colormap.md, "One
+evaluation per sample"): what is asserted of it is what it reaches, with a
+margin: at least 1.5× better than the 16-tap preset at equal time at 4 and
+16 spp (measured: about 2×)."""
+
+import os
+
+import pytest
+
+from penumbra.colormap import filter_quality
+
+from bench.helpers import colormap_equal_time as equal_time  # noqa: E402
+
+SIZE = (96, 54)
+GOAL = 0.7
+MARGIN = 1.2
+PLAIN_SPP = [1, 4, 16, 64, 256]
+FILTERED_SPP = [4, 16]
+LEGACY = "TAPS_16_MIXTURE"
+
+
+@pytest.fixture(scope="module")
+def ratios(tmp_path_factory):
+    """{preset: {spp: equal-time RMSE ratio}}, the add-on registered only
+    while rendering (the other tests' fixture registers it per test)."""
+    import penumbra
+    folder = str(tmp_path_factory.mktemp("equal_time"))
+    penumbra.register()
+    try:
+        scene, plane, material = equal_time.new_plane_scene(SIZE)
+        materials = {equal_time.PLAIN: material}
+        for quality in (filter_quality.DEFAULT, LEGACY):
+            materials[quality] = equal_time.bake_quality(scene, plane, material, quality,
+                                                         os.path.join(folder, "lut"))
+        renderer = equal_time.Renderer(scene, plane, materials, folder)
+        reference = equal_time.reference_image(renderer, 1024)
+        counts = {equal_time.PLAIN: PLAIN_SPP, filter_quality.DEFAULT: FILTERED_SPP, LEGACY: FILTERED_SPP}
+        results = equal_time.sweep(renderer, reference, counts, repeats=3)
+    finally:
+        penumbra.unregister()
+    return {q: equal_time.equal_time_ratios(results, q, "cpu") for q in (filter_quality.DEFAULT, LEGACY)}
+
+
+@pytest.mark.parametrize("spp", FILTERED_SPP)
+def test_sixteen_taps_fail_the_equal_time_goal(ratios, spp):
+    assert ratios[LEGACY][spp] > GOAL * MARGIN, ratios
+
+
+@pytest.mark.parametrize("spp", FILTERED_SPP)
+def test_default_preset_beats_sixteen_taps_at_equal_time(ratios, spp):
+    assert filter_quality.DEFAULT != LEGACY
+    assert ratios[filter_quality.DEFAULT][spp] * 1.5 < ratios[LEGACY][spp], ratios
