@@ -1,0 +1,182 @@
+"""The pose model on the GPU (issue 27): uploaded once per model as textures
+(model_shader.py says what each holds), evaluated per vertex in the preview's
+vertex shader with the §4.3 steps of preview_shader.py. Per frame only the
+pose's features, the world matrix and the lighting (uniform blocks) and the
+evaluated mesh's positions and normals (one texture) go to the GPU.
+
+Why the evaluated mesh and not skinning in the shader: Blender evaluates the
+armature (and any other deform, shape keys included) on the CPU for its own
+drawing anyway, and the CPU shading's frames use the normals of that
+evaluated mesh (Blender's rule, from the core): uploading it keeps the GPU
+exactly on the CPU's geometry for every modifier stack, where skinning in the
+shader would need the armature modifier's exact rule, a fallback for every
+other deform, and the normals rebuilt from skinned neighbours.
+docs/visibility-gpu-preview-benchmark.md has what the copy costs.
+
+Needs a GPU context (a viewport draw, xvfb-run, or gpu.init() in bpy 5.x).
+"""
+
+import numpy as np
+
+from . import model_shader, preview_shader
+
+_shaders = {}  # (order, lobes, brdf, readback, width, feature vec4s) -> GPUShader
+
+
+def shader_for(order, lobes, brdf, readback, width, feature_vec4s):
+    import gpu
+    key = (order, lobes, brdf, readback, width, feature_vec4s)
+    shader = _shaders.get(key)
+    if shader is not None:
+        return shader
+    info = gpu.types.GPUShaderCreateInfo()
+    info.define("ORDER", str(order))
+    info.define("NC", str(order * order))
+    info.vertex_in(0, "INT", "p_vertex")
+    for slot, name in enumerate(("model_weights", "model_bias", "model_blocks", "model_layout", "frame_geometry")):
+        info.sampler(slot, "FLOAT_2D", name)
+    info.typedef_source(preview_shader.uniform_block_source(order) + model_shader.pose_block_source(feature_vec4s))
+    info.uniform_buf(0, "PenumbraShading", "shading")
+    info.uniform_buf(1, "PenumbraPose", "pose")
+    interface = gpu.types.GPUStageInterfaceInfo(f"penumbra_model_{'readback' if readback else 'view'}")
+    if readback:
+        interface.flat("VEC4", "result")
+        info.push_constant("VEC2", "readback_size")
+        fragment = preview_shader.FRAGMENT_READBACK
+    else:
+        interface.smooth("VEC3", "shade")
+        info.push_constant("MAT4", "ViewProjectionMatrix")
+        info.push_constant("FLOAT", "depth_bias")
+        fragment = preview_shader.FRAGMENT_VIEWPORT
+    info.vertex_out(interface)
+    info.fragment_out(0, "VEC4", "fragColor")
+    info.vertex_source(preview_shader.vertex_source(order, lobes, brdf, readback, model_texture_width=width))
+    info.fragment_source(fragment)
+    shader = gpu.shader.create_from_info(info)
+    _shaders[key] = shader
+    return shader
+
+
+def _texture(size, flat, texture_format):
+    import gpu
+    return gpu.types.GPUTexture(size, format=texture_format, data=gpu.types.Buffer("FLOAT", flat.size, flat))
+
+
+class ModelOnGpu:
+    """One model's textures, its vertex-index buffer and triangles: made once,
+    kept while the model and mesh stay the same. `layout` names each
+    texture's (width, height), `bytes` what they and the buffers take."""
+
+    def __init__(self, model, neighbours, triangles=None):
+        import gpu
+        self.order, self.lobes, self.vertex_count = model.order, model.lobes, model.vertex_count
+        self.max_texture_size = gpu.capabilities.max_texture_size_get()
+        self.width = model_shader.texture_width(self.max_texture_size)
+        blocks = model.stored_blocks()
+        self.feature_count = int(blocks["feature_offsets"][-1])
+        self.feature_vec4s = model_shader.feature_vec4_count(self.feature_count)
+        self.textures, self.layout, self.bytes = {}, {}, 0
+        for name, texels in model_shader.pack_model(blocks, model.order, model.lobes, neighbours).items():
+            size, flat = model_shader.grid_array(texels, self.width, self.max_texture_size)
+            texture_format = "RGBA16F" if name == "model_weights" else "RGBA32F"
+            self.textures[name] = _texture(size, flat, texture_format)
+            self.layout[name] = size
+            self.bytes += size[0] * size[1] * (8 if texture_format == "RGBA16F" else 16)
+        vertex_format = gpu.types.GPUVertFormat()
+        vertex_format.attr_add(id="p_vertex", comp_type="I32", len=1, fetch_mode="INT")
+        self.vertices = gpu.types.GPUVertBuf(vertex_format, self.vertex_count)
+        self.vertices.attr_fill("p_vertex", np.arange(self.vertex_count, dtype=np.int32))
+        self.bytes += 4 * self.vertex_count
+        self.triangles = None
+        if triangles is not None:
+            tri = np.ascontiguousarray(triangles, dtype=np.int32)
+            self.triangles = gpu.types.GPUBatch(type="TRIS", buf=self.vertices,
+                                                elem=gpu.types.GPUIndexBuf(type="TRIS", seq=tri))
+            self.bytes += tri.nbytes
+        self.pose = None      # GPUUniformBuf, per frame
+        self.shading = None   # GPUUniformBuf, per frame
+        self.geometry = None  # GPUTexture, per frame
+
+    def set_frame(self, frame):
+        """Uploads one frame (FrameInputs): the geometry texture and both uniform blocks."""
+        import gpu
+        size, flat = model_shader.grid_array(frame.geometry, self.width, self.max_texture_size)
+        self.geometry = _texture(size, flat, "RGBA32F")
+        if self.pose is None:
+            self.pose = gpu.types.GPUUniformBuf(frame.pose)
+        else:
+            self.pose.update(frame.pose)
+        if self.shading is None or self.shading_size != len(frame.shading):
+            self.shading = gpu.types.GPUUniformBuf(frame.shading)
+            self.shading_size = len(frame.shading)
+        else:
+            self.shading.update(frame.shading)
+        self.brdf = frame.brdf
+
+    def bind(self, shader):
+        for name, texture in self.textures.items():
+            shader.uniform_sampler(name, texture)
+        shader.uniform_sampler("frame_geometry", self.geometry)
+        shader.uniform_block("shading", self.shading)
+        shader.uniform_block("pose", self.pose)
+
+    def draw(self, view_projection, depth_bias):
+        shader = shader_for(self.order, self.lobes, self.brdf, False, self.width, self.feature_vec4s)
+        shader.bind()
+        self.bind(shader)
+        shader.uniform_float("ViewProjectionMatrix", view_projection)
+        shader.uniform_float("depth_bias", depth_bias)
+        self.triangles.draw(shader)
+
+    def shade_offscreen(self, readback_width=1024):
+        """Every vertex shaded into an RGBA32F offscreen buffer, one a pixel,
+        read back: (rgb (V, 3), visibility (V,)) float32, unclamped."""
+        import gpu
+        n = self.vertex_count
+        width = min(readback_width, max(n, 1))
+        height = max(1, -(-n // width))
+        shader = shader_for(self.order, self.lobes, self.brdf, True, self.width, self.feature_vec4s)
+        batch = gpu.types.GPUBatch(type="POINTS", buf=self.vertices)
+        offscreen = gpu.types.GPUOffScreen(width, height, format="RGBA32F")
+        pixels = gpu.types.Buffer("FLOAT", width * height * 4)  # flat: 3.4's 3D Buffer gives numpy wrong strides
+        try:
+            with offscreen.bind():
+                framebuffer = gpu.state.active_framebuffer_get()
+                framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0))
+                gpu.state.blend_set("NONE")
+                gpu.state.depth_test_set("NONE")
+                if hasattr(gpu.state, "program_point_size_set"):
+                    gpu.state.program_point_size_set(True)
+                shader.bind()
+                self.bind(shader)
+                shader.uniform_float("readback_size", (float(width), float(height)))
+                batch.draw(shader)
+                framebuffer.read_color(0, 0, width, height, 4, 0, "FLOAT", data=pixels)
+                if hasattr(gpu.state, "program_point_size_set"):
+                    gpu.state.program_point_size_set(False)
+        finally:
+            offscreen.free()
+        flat = np.asarray(pixels, dtype=np.float32).reshape(-1, 4)[:n]
+        return np.ascontiguousarray(flat[:, :3]), np.ascontiguousarray(flat[:, 3])
+
+
+class FrameInputs:
+    """What one frame uploads, computed on the CPU: geometry texels, the pose
+    and shading uniform blocks' bytes, the BRDF."""
+
+    def __init__(self, geometry, pose, shading, brdf):
+        preview_shader.check_configuration(1, 1, brdf)
+        self.geometry, self.pose, self.shading, self.brdf = geometry, pose, shading, brdf
+        self.seconds = {}
+
+
+def frame_inputs(model, features, positions, normals, world, lighting, brdf="diffuse", phong_exponent=16.0,
+                 camera=(0.0, 0.0, 0.0), transmission=(0.5, 0.5, 0.5)):
+    """FrameInputs from object-space positions and normals (V, 3), the world
+    matrix (4, 4) and the lighting (order², 3): what PoseModel.shade takes
+    after its world transform."""
+    vec4s = model_shader.feature_vec4_count(len(features))
+    return FrameInputs(model_shader.geometry_texels(positions, normals),
+                       model_shader.pose_data(features, vec4s, world),
+                       preview_shader.uniform_data(model.order, lighting, brdf, phong_exponent, camera, transmission),
+                       brdf)

@@ -1,0 +1,195 @@
+"""The GLSL that evaluates the pose model in the GPU preview's vertex shader
+(paper §4.3 step 1, then the frame), and the numpy packing of what it reads.
+Plain Python and numpy: no bpy, no gpu (gpu_model.py uploads).
+
+Once per model, four 2D float textures, read with texelFetch, texel i at
+(i mod width, i div width), the width fixed per model by texture_width():
+- model_weights (RGBA16F): every stored joint block's rows, the binary16
+  values as stored (exact in RGBA16F), each row of d parameters padded to
+  whole texels (R = ⌈d/4⌉ texels a row), block after block;
+- model_bias (RGBA32F): each vertex's bias, R texels a vertex;
+- model_blocks (RGBA32F): per block (first feature of its joint, its
+  directions c_e, its power-of-two scale, its first row in model_weights);
+- model_layout (RGBA32F): per vertex (first block, block count, reference
+  neighbour, 0).
+Integers ride in floats: exact below 2^24, which pack_model checks.
+
+Per frame, the uniform block PenumbraPose (the pose's features, 4 a vec4,
+and the object's world matrix split as the CPU splits it) and one RGBA32F
+texture frame_geometry: the evaluated mesh's object-space position and
+normal, 2 texels per vertex (normals by Blender's rule, from the core).
+The vertex reads its own and its reference neighbour's position, so the
+tangent follows the same edge as core/visibility/mesh_frames.hpp's, with the
+same fallback (Duff et al. 2017) where the edge is along the normal.
+"""
+
+import numpy as np
+
+EXACT_INTEGER = 1 << 24  # floats hold every integer below this
+FEATURE_VEC4_STEP = 16   # feature array sizes round up to this many vec4s (fewer shader variants)
+
+
+def texels_per_row(order, lobes):
+    return -(-lobes * (2 + order) // 4)
+
+
+def texture_width(max_texture_size):
+    """The width every model texture is laid out at: wide rows, within the limit."""
+    return int(min(max_texture_size, 4096))
+
+
+def texture_grid(texel_count, width, max_texture_size):
+    """(width, height) of a texture holding texel_count texels at `width`;
+    ValueError past the GPU's size limit."""
+    height = max(1, -(-int(texel_count) // width))
+    if height > max_texture_size:
+        raise ValueError(f"the GPU preview needs a {width} × {height} texture; this GPU allows "
+                         f"{max_texture_size} × {max_texture_size}")
+    return width, height
+
+
+def grid_array(texels, width, max_texture_size):
+    """Texels (N, 4) float32 zero-padded to a whole grid: ((W, H), flat float32)."""
+    size = texture_grid(len(texels), width, max_texture_size)
+    flat = np.zeros(size[0] * size[1] * 4, dtype=np.float32)
+    flat[:texels.size] = texels.reshape(-1)
+    return size, flat
+
+
+def feature_vec4_count(feature_count):
+    need = max(1, -(-int(feature_count) // 4))
+    return -(-need // FEATURE_VEC4_STEP) * FEATURE_VEC4_STEP
+
+
+def pack_model(blocks, order, lobes, neighbours):
+    """The four model textures' texels from PoseModel.stored_blocks() and the
+    reference neighbours: {'model_weights', 'model_bias', 'model_blocks',
+    'model_layout': (N, 4) float32}."""
+    d = lobes * (2 + order)
+    rows_per_texel = texels_per_row(order, lobes)
+    bias = np.asarray(blocks["bias"], dtype=np.float32).reshape(-1, d)
+    vertex_count = len(bias)
+    directions = np.asarray(blocks["block_directions"], dtype=np.int64)
+    joint_offsets = np.asarray(blocks["joint_offsets"], dtype=np.int64)
+    feature_offsets = np.asarray(blocks["feature_offsets"], dtype=np.int64)
+    rows = int(directions.sum())
+    if max(rows, len(directions), vertex_count) >= EXACT_INTEGER:
+        raise ValueError(f"the GPU preview indexes at most {EXACT_INTEGER - 1} vertices, blocks or weight rows")
+    halves = np.asarray(blocks["weights"], dtype=np.uint16).view(np.float16).astype(np.float32).reshape(rows, d)
+    padded = np.zeros((rows, 4 * rows_per_texel), dtype=np.float32)
+    padded[:, :d] = halves
+    bias_padded = np.zeros((vertex_count, 4 * rows_per_texel), dtype=np.float32)
+    bias_padded[:, :d] = bias
+    first_row = np.concatenate([[0], np.cumsum(directions)[:-1]]) if len(directions) else np.zeros(0)
+    block_texels = np.stack([feature_offsets[np.asarray(blocks["joint_index"], dtype=np.int64)], directions,
+                             np.asarray(blocks["weight_scales"], dtype=np.float64), first_row], axis=1)
+    layout = np.zeros((vertex_count, 4), dtype=np.float32)
+    layout[:, 0] = joint_offsets[:-1]
+    layout[:, 1] = np.diff(joint_offsets)
+    layout[:, 2] = np.asarray(neighbours, dtype=np.int64)
+    return {"model_weights": padded.reshape(-1, 4), "model_bias": bias_padded.reshape(-1, 4),
+            "model_blocks": block_texels.astype(np.float32).reshape(-1, 4), "model_layout": layout}
+
+
+def pose_data(features, feature_vec4s, world):
+    """PenumbraPose's bytes: the features, then the world matrix as the core
+    splits it (linear, normal matrix = inverse transpose, or identity when
+    singular; offset), columns as vec4s."""
+    world = np.asarray(world, dtype=np.float64).reshape(4, 4)
+    linear = world[:3, :3]
+    determinant = np.linalg.det(linear)
+    normal_matrix = np.linalg.inv(linear).T if determinant != 0.0 and np.isfinite(determinant) else np.eye(3)
+    data = np.zeros((feature_vec4s + 7, 4), dtype=np.float32)
+    flat = data[:feature_vec4s].reshape(-1)
+    flat[:len(features)] = features
+    data[feature_vec4s:feature_vec4s + 3, :3] = linear.T.astype(np.float32)
+    data[feature_vec4s + 3:feature_vec4s + 6, :3] = normal_matrix.T.astype(np.float32)
+    data[feature_vec4s + 6, :3] = world[:3, 3]
+    return data.tobytes()
+
+
+def pose_block_source(feature_vec4s):
+    return (f"struct PenumbraPose {{\n"
+            f"  vec4 features[{feature_vec4s}];\n"
+            f"  vec4 world_linear[3];\n"          # columns of the world matrix's 3 × 3
+            f"  vec4 normal_matrix[3];\n"   # columns of its inverse transpose
+            f"  vec4 offset;\n"
+            f"}};\n")
+
+
+def geometry_texels(positions, normals):
+    """frame_geometry's texels: (2V, 4) float32, position then normal per vertex."""
+    texels = np.zeros((len(positions), 2, 4), dtype=np.float32)
+    texels[:, 0, :3] = positions
+    texels[:, 1, :3] = normals
+    return texels.reshape(-1, 4)
+
+
+def helper_source(width):
+    return (f"ivec2 texel_at(int i) {{ return ivec2(i % {width}, i / {width}); }}\n"
+            # Duff et al. 2017 (mesh_frames.cpp basis_from_normal): t from n alone.
+            "vec3 tangent_from_normal(vec3 n)\n{\n"
+            "  float sign_z = n.z >= 0.0 ? 1.0 : -1.0;\n"
+            "  float a = -1.0 / (sign_z + n.z);\n"
+            "  return vec3(1.0 + sign_z * n.x * n.x * a, sign_z * n.x * n.y * a, -sign_z * n.x);\n}\n")
+
+
+def main_prologue(order, lobes):
+    """main()'s first lines in the model path: the vertex's world position,
+    normal and tangent (p_position, p_normal, p_tangent, as the attribute path
+    has them), and its lobe parameters q[] from the model and the pose."""
+    r = texels_per_row(order, lobes)
+    return [
+        "  int vertex = p_vertex;",
+        "  vec4 vertex_layout = texelFetch(model_layout, texel_at(vertex), 0);",
+        "  vec3 own = texelFetch(frame_geometry, texel_at(2 * vertex), 0).xyz;",
+        "  vec3 normal_object = texelFetch(frame_geometry, texel_at(2 * vertex + 1), 0).xyz;",
+        "  int neighbour = int(vertex_layout.z);",
+        "  vec3 other = texelFetch(frame_geometry, texel_at(2 * neighbour), 0).xyz;",
+        "  mat3 object_to_world = mat3(pose.world_linear[0].xyz, pose.world_linear[1].xyz, pose.world_linear[2].xyz);",
+        "  mat3 normal_matrix = mat3(pose.normal_matrix[0].xyz, pose.normal_matrix[1].xyz, pose.normal_matrix[2].xyz);",
+        "  vec3 p_position = object_to_world * own + pose.offset.xyz;",
+        "  vec3 p_normal = normal_matrix * normal_object;",
+        # The reference edge, projected on the tangent plane (mesh_frames.cpp vertex_frame).
+        "  vec3 edge = (object_to_world * other + pose.offset.xyz) - p_position;",
+        "  float normal_length = length(p_normal);",
+        "  vec3 unit_normal = normal_length > 0.0 ? p_normal / normal_length : vec3(0.0, 0.0, 1.0);",
+        "  vec3 p_tangent = edge - unit_normal * dot(unit_normal, edge);",
+        "  float tangent_length = length(p_tangent);",
+        "  bool from_edge = neighbour != vertex && tangent_length > 1e-3 * length(edge) && !isinf(tangent_length);",
+        "  p_tangent = from_edge ? p_tangent / tangent_length : tangent_from_normal(unit_normal);",
+        f"  vec4 q[{r}];",
+        f"  for (int k = 0; k < {r}; k++) {{ q[k] = texelFetch(model_bias, texel_at(vertex * {r} + k), 0); }}",
+        "  float lx, ly, r2, pull, s_rest;",
+        "  bool usable;",
+        "  int first_block = int(vertex_layout.x), block_end = int(vertex_layout.x) + int(vertex_layout.y);",
+        "  for (int e = first_block; e < block_end; e++) {",
+        "    vec4 block = texelFetch(model_blocks, texel_at(e), 0);",
+        "    int feature = int(block.x), directions = int(block.y), row = int(block.w);",
+        "    for (int c = 0; c < directions; c++) {",
+        "      float z = pose.features[(feature + c) / 4][(feature + c) % 4] * block.z;",
+        f"      for (int k = 0; k < {r}; k++) {{ q[k] += z * texelFetch(model_weights, texel_at((row + c) * {r} + k), 0); }}",
+        "    }",
+        "  }",
+    ]
+
+
+def lobe_from_parameters(order, lobe):
+    """Lines setting `a` (unit axis, local frame) and g[] (bands) of one lobe
+    from q[]: lambert_to_axis as core/visibility/vertex_kernels.cpp has it
+    (outside the disc r = 2 pulled onto its rim; non-finite: +z)."""
+    base = lobe * (2 + order)
+
+    def q(k):
+        return f"q[{k // 4}].{'xyzw'[k % 4]}"
+
+    lines = [f"  // lobe {lobe}: Lambert azimuthal (X, Y) and band coefficients",
+             f"  lx = {q(base)}; ly = {q(base + 1)};",
+             "  r2 = lx * lx + ly * ly;",
+             "  usable = !isnan(r2) && !isinf(r2);",
+             "  pull = (usable && r2 > 4.0) ? 2.0 / sqrt(r2) : 1.0;",
+             "  lx *= pull; ly *= pull; r2 = (usable && r2 > 4.0) ? 4.0 : r2;",
+             "  s_rest = sqrt(max(1.0 - 0.25 * r2, 0.0));",
+             "  a = usable ? vec3(s_rest * lx, s_rest * ly, 1.0 - 0.5 * r2) : vec3(0.0, 0.0, 1.0);"]
+    lines += [f"  g[{l}] = {q(base + 2 + l)};" for l in range(order)]
+    return lines
