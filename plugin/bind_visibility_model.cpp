@@ -250,12 +250,14 @@ void bind_stored_blocks(py::class_<vis::PoseModel, Model>& c) {
     c.def_static("from_blocks", [](int order, int lobes, const std::vector<std::string>& joints,
                                    const Indices& feature_offsets, const Floats& feature_basis,
                                    const Indices& joint_offsets, const Indices& joint_index,
-                                   const Indices& block_directions, const Floats& bias, const Floats& weights) {
+                                   const Indices& block_directions, const Floats& bias, const Floats& weights,
+                                   std::uint64_t topology_hash) {
         auto model = std::make_shared<vis::PoseModel>();
         model->order = order;
         model->lobes = lobes;
         model->joints = joints;
         model->armature_bones = joints;
+        model->topology_hash = topology_hash;
         const auto jo = indices(joint_offsets, "joint_offsets", false);
         if (jo.empty()) throw py::value_error("joint_offsets needs vertex_count + 1 entries");
         model->vertex_count = jo.size() - 1;
@@ -270,7 +272,7 @@ void bind_stored_blocks(py::class_<vis::PoseModel, Model>& c) {
         return model;
     }, py::arg("order"), py::arg("lobes"), py::arg("joints"), py::arg("feature_offsets"), py::arg("feature_basis"),
        py::arg("joint_offsets"), py::arg("joint_index"), py::arg("block_directions"), py::arg("bias"),
-       py::arg("weights"),
+       py::arg("weights"), py::arg("topology_hash") = 0,
        "A model from given weights (float, stored as binary16 blocks) in the stored layout, RotationMatrix "
        "features: synthetic models for tests and benchmarks. Raises ArgumentError when inconsistent.");
 }

@@ -100,7 +100,8 @@ class ModelOnGpu:
     def set_frame(self, frame):
         """Uploads one frame (FrameInputs): the geometry texture and both uniform blocks."""
         import gpu
-        size, flat = model_shader.grid_array(frame.geometry, self.width, self.max_texture_size)
+        size, flat = frame.geometry if isinstance(frame.geometry, tuple) else \
+            model_shader.grid_array(frame.geometry, self.width, self.max_texture_size)
         self.geometry = _texture(size, flat, "RGBA32F")
         if self.pose is None:
             self.pose = gpu.types.GPUUniformBuf(frame.pose)
@@ -161,8 +162,9 @@ class ModelOnGpu:
 
 
 class FrameInputs:
-    """What one frame uploads, computed on the CPU: geometry texels, the pose
-    and shading uniform blocks' bytes, the BRDF."""
+    """What one frame uploads, computed on the CPU: geometry texels ((2V, 4),
+    or already a grid: ((W, H), flat)), the pose and shading uniform blocks'
+    bytes, the BRDF."""
 
     def __init__(self, geometry, pose, shading, brdf):
         preview_shader.check_configuration(1, 1, brdf)

@@ -125,6 +125,21 @@ def geometry_texels(positions, normals):
     return texels.reshape(-1, 4)
 
 
+class GeometryGrid:
+    """frame_geometry's padded grid, kept from frame to frame (the texture
+    copies it when made): fill() writes a frame's positions and normals."""
+
+    def __init__(self, vertex_count, width, max_texture_size):
+        self.size = texture_grid(2 * vertex_count, width, max_texture_size)
+        self.flat = np.zeros(self.size[0] * self.size[1] * 4, dtype=np.float32)
+        self.texels = self.flat[:8 * vertex_count].reshape(-1, 2, 4)
+
+    def fill(self, positions, normals):
+        self.texels[:, 0, :3] = positions
+        self.texels[:, 1, :3] = normals
+        return self.size, self.flat
+
+
 def helper_source(width):
     return (f"ivec2 texel_at(int i) {{ return ivec2(i % {width}, i / {width}); }}\n"
             # Duff et al. 2017 (mesh_frames.cpp basis_from_normal): t from n alone.
