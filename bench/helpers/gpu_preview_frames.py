@@ -16,17 +16,14 @@ its texture layout, its load time and the draw time at 1280×720. Prints one
 line `RESULT {json}`.
 """
 
-import json
 import math
 import os
 import statistics
 import sys
 import tempfile
 import time
-import traceback
 
 import bpy
-import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -40,61 +37,11 @@ if "--gpu-init" in ARGS:
     import gpu
     gpu.init()
 
+sys.path.append(ROOT)
 import penumbra  # noqa: E402
-from penumbra import compat, native  # noqa: E402
-from penumbra.visibility import gpu_preview, mesh_data  # noqa: E402
-import visibility_character  # noqa: E402
-
-
-def empty_scene():
-    for collection in (bpy.data.objects, bpy.data.meshes, bpy.data.armatures, bpy.data.actions,
-                       bpy.data.cameras, bpy.data.worlds, bpy.data.images, bpy.data.materials):
-        for block in list(collection):
-            collection.remove(block)
-    return bpy.context.scene
-
-
-def synthetic_model(obj, armature, path, order=4, lobes=2):
-    core = native.require()
-    rng = np.random.default_rng(27)
-    mesh = obj.data
-    vertex_count = len(mesh.vertices)
-    joints = [b.name for b in armature.data.bones if b.use_deform]
-    directions = np.full(len(joints), 3)
-    feature_offsets = np.concatenate([[0], np.cumsum(directions)])
-    basis = np.zeros((feature_offsets[-1], 9), dtype=np.float32)
-    for j in range(len(joints)):
-        basis[feature_offsets[j]:feature_offsets[j + 1], :3] = np.eye(3)
-    counts = rng.integers(1, 4, vertex_count)
-    joint_offsets = np.concatenate([[0], np.cumsum(counts)])
-    joint_index = np.concatenate([np.sort(rng.choice(len(joints), c, replace=False)) for c in counts])
-    block_directions = np.full(len(joint_index), 3)
-    d = lobes * (2 + order)
-    bias = rng.normal(0.0, 0.3, (vertex_count, d)).astype(np.float32)
-    weights = rng.normal(0.0, 0.1, int(block_directions.sum()) * d).astype(np.float32)
-    model = core.visibility.PoseModel.from_blocks(order, lobes, joints, feature_offsets, basis.reshape(-1),
-                                                  joint_offsets, joint_index, block_directions, bias.reshape(-1),
-                                                  weights, topology_hash=mesh_data.topology_hash(mesh))
-    model.save(path)
-    return model
-
-
-def character(vertices, tmp):
-    scene = empty_scene()
-    obj, armature = visibility_character.build(detail=max(1.0, math.sqrt(vertices / 890.0)), frames=24)
-    world = bpy.data.worlds.new("Uniform")
-    compat.ensure_nodes(world).nodes["Background"].inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    scene.world = world
-    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    scene.collection.objects.link(camera)
-    scene.camera = camera
-    camera.location = (1.5, -6.0, 2.0)
-    path = os.path.join(tmp, f"synthetic_{len(obj.data.vertices)}.pzh")
-    synthetic_model(obj, armature, path)
-    obj.penumbra_visibility.model_path = path
-    obj.penumbra_visibility.enabled = True
-    scene.penumbra.visibility.live_update = False
-    return scene, obj
+from bench.helpers.blender_result import report  # noqa: E402
+from penumbra.visibility import gpu_preview  # noqa: E402
+from bench.helpers.gpu_preview_scene import character  # noqa: E402
 
 
 def view3d():
@@ -228,7 +175,7 @@ def measure(vertices, tmp, override):
     uploaded = time.perf_counter()
     _, frame = gpu_preview.frame_of(obj, scene)
     on_gpu.set_frame(frame)
-    geometry = frame.geometry[0][0] * frame.geometry[0][1] * 16
+    geometry = frame.geometry[0][0] * frame.geometry[0][1] * 4
     out.update({"load_file_s": round(loaded - t, 3), "load_gpu_s": round(uploaded - loaded, 3),
                 "gpu_model_bytes_per_vertex": round(on_gpu.bytes / out["vertices"], 1),
                 "gpu_frame_bytes_per_vertex": round(geometry / out["vertices"], 1),
@@ -238,26 +185,17 @@ def measure(vertices, tmp, override):
     return out
 
 
-def main():
-    result = {"blender": bpy.app.version_string, "background": bool(bpy.app.background)}
-    try:
-        import gpu
-        penumbra.register()
-        result["renderer"] = f"{gpu.platform.renderer_get()} / {gpu.platform.version_get()}"
-        result["max_texture_size"] = gpu.capabilities.max_texture_size_get()
-        override = None if bpy.app.background else view3d()
-        if override is not None:
-            bpy.context.preferences.system.viewport_aa = "OFF"
-            bpy.context.scene.display.viewport_aa = "OFF"
-        with tempfile.TemporaryDirectory() as tmp:
-            result["sizes"] = [measure(v, tmp, override) for v in SIZES]
-        result["ok"] = True
-    except Exception:
-        result["ok"] = False
-        result["error"] = traceback.format_exc()
-    print("RESULT " + json.dumps(result), flush=True)
+def measure_all(result):
+    import gpu
+    penumbra.register()
+    result["renderer"] = f"{gpu.platform.renderer_get()} / {gpu.platform.version_get()}"
+    result["max_texture_size"] = gpu.capabilities.max_texture_size_get()
+    override = None if bpy.app.background else view3d()
+    if override is not None:
+        bpy.context.preferences.system.viewport_aa = "OFF"
+        bpy.context.scene.display.viewport_aa = "OFF"
+    with tempfile.TemporaryDirectory() as tmp:
+        result["sizes"] = [measure(v, tmp, override) for v in SIZES]
 
 
-main()
-if not bpy.app.background:
-    bpy.ops.wm.quit_blender()
+report(measure_all)

@@ -16,11 +16,68 @@ docs/visibility-gpu-preview-benchmark.md has what the copy costs.
 Needs a GPU context (a viewport draw, xvfb-run, or gpu.init() in bpy 5.x).
 """
 
+import weakref
+
 import numpy as np
 
 from . import model_shader, preview_shader
 
+_live = weakref.WeakSet()  # every ModelOnGpu not yet freed (live_texture_count)
 _shaders = {}  # (order, lobes, brdf, readback, width, feature vec4s) -> GPUShader
+
+
+def finish_shader(info, readback, vertex_source, name):
+    """The stage interface, push constants and fragment stage both preview
+    paths share (readback: one vertex a pixel of an RGBA32F buffer; else the
+    viewport's triangles), then the compiled shader."""
+    import gpu
+    interface = gpu.types.GPUStageInterfaceInfo(f"{name}_{'readback' if readback else 'view'}")
+    if readback:
+        interface.flat("VEC4", "result")
+        info.push_constant("VEC2", "readback_size")
+        fragment = preview_shader.FRAGMENT_READBACK
+    else:
+        interface.smooth("VEC3", "shade")
+        info.push_constant("MAT4", "ViewProjectionMatrix")
+        info.push_constant("FLOAT", "depth_bias")
+        fragment = preview_shader.FRAGMENT_VIEWPORT
+    info.vertex_out(interface)
+    info.fragment_out(0, "VEC4", "fragColor")
+    info.vertex_source(vertex_source)
+    info.fragment_source(fragment)
+    return gpu.shader.create_from_info(info)
+
+
+def read_back(shader, vertices, vertex_count, bind, readback_width=1024):
+    """Draws `vertices` (a GPUVertBuf) as points with `shader`, one vertex a
+    pixel of an RGBA32F offscreen buffer, after bind(shader) set its inputs,
+    and reads it back: (rgb (V, 3), visibility (V,)) float32, unclamped."""
+    import gpu
+    n = vertex_count
+    width = min(readback_width, max(n, 1))
+    height = max(1, -(-n // width))
+    batch = gpu.types.GPUBatch(type="POINTS", buf=vertices)
+    offscreen = gpu.types.GPUOffScreen(width, height, format="RGBA32F")
+    pixels = gpu.types.Buffer("FLOAT", width * height * 4)  # flat: 3.4's 3D Buffer gives numpy wrong strides
+    try:
+        with offscreen.bind():
+            framebuffer = gpu.state.active_framebuffer_get()
+            framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0))
+            gpu.state.blend_set("NONE")
+            gpu.state.depth_test_set("NONE")
+            if hasattr(gpu.state, "program_point_size_set"):
+                gpu.state.program_point_size_set(True)
+            shader.bind()
+            bind(shader)
+            shader.uniform_float("readback_size", (float(width), float(height)))
+            batch.draw(shader)
+            framebuffer.read_color(0, 0, width, height, 4, 0, "FLOAT", data=pixels)
+            if hasattr(gpu.state, "program_point_size_set"):
+                gpu.state.program_point_size_set(False)
+    finally:
+        offscreen.free()
+    flat = np.asarray(pixels, dtype=np.float32).reshape(-1, 4)[:n]
+    return np.ascontiguousarray(flat[:, :3]), np.ascontiguousarray(flat[:, 3])
 
 
 def shader_for(order, lobes, brdf, readback, width, feature_vec4s):
@@ -38,21 +95,8 @@ def shader_for(order, lobes, brdf, readback, width, feature_vec4s):
     info.typedef_source(preview_shader.uniform_block_source(order) + model_shader.pose_block_source(feature_vec4s))
     info.uniform_buf(0, "PenumbraShading", "shading")
     info.uniform_buf(1, "PenumbraPose", "pose")
-    interface = gpu.types.GPUStageInterfaceInfo(f"penumbra_model_{'readback' if readback else 'view'}")
-    if readback:
-        interface.flat("VEC4", "result")
-        info.push_constant("VEC2", "readback_size")
-        fragment = preview_shader.FRAGMENT_READBACK
-    else:
-        interface.smooth("VEC3", "shade")
-        info.push_constant("MAT4", "ViewProjectionMatrix")
-        info.push_constant("FLOAT", "depth_bias")
-        fragment = preview_shader.FRAGMENT_VIEWPORT
-    info.vertex_out(interface)
-    info.fragment_out(0, "VEC4", "fragColor")
-    info.vertex_source(preview_shader.vertex_source(order, lobes, brdf, readback, model_texture_width=width))
-    info.fragment_source(fragment)
-    shader = gpu.shader.create_from_info(info)
+    shader = finish_shader(info, readback, preview_shader.vertex_source(
+        order, lobes, brdf, readback, model_texture_width=width), "penumbra_model")
     _shaders[key] = shader
     return shader
 
@@ -93,6 +137,8 @@ class ModelOnGpu:
             self.triangles = gpu.types.GPUBatch(type="TRIS", buf=self.vertices,
                                                 elem=gpu.types.GPUIndexBuf(type="TRIS", seq=tri))
             self.bytes += tri.nbytes
+        self.pose_bytes = None  # the last uploaded PenumbraPose (what the viewport shows)
+        _live.add(self)
         self.pose = None      # GPUUniformBuf, per frame
         self.shading = None   # GPUUniformBuf, per frame
         self.geometry = None  # GPUTexture, per frame
@@ -100,9 +146,13 @@ class ModelOnGpu:
     def set_frame(self, frame):
         """Uploads one frame (FrameInputs): the geometry texture and both uniform blocks."""
         import gpu
-        size, flat = frame.geometry if isinstance(frame.geometry, tuple) else \
-            model_shader.grid_array(frame.geometry, self.width, self.max_texture_size)
-        self.geometry = _texture(size, flat, "RGBA32F")
+        if isinstance(frame.geometry, tuple):
+            size, flat = frame.geometry
+        else:
+            grid = model_shader.GeometryGrid(self.vertex_count, self.width, self.max_texture_size)
+            size, flat = grid.fill(*np.split(frame.geometry, 2))
+        self.geometry = _texture(size, flat, "R32F")
+        self.pose_bytes = frame.pose
         if self.pose is None:
             self.pose = gpu.types.GPUUniformBuf(frame.pose)
         else:
@@ -129,42 +179,23 @@ class ModelOnGpu:
         shader.uniform_float("depth_bias", depth_bias)
         self.triangles.draw(shader)
 
-    def shade_offscreen(self, readback_width=1024):
+    def shade_offscreen(self):
         """Every vertex shaded into an RGBA32F offscreen buffer, one a pixel,
         read back: (rgb (V, 3), visibility (V,)) float32, unclamped."""
-        import gpu
-        n = self.vertex_count
-        width = min(readback_width, max(n, 1))
-        height = max(1, -(-n // width))
         shader = shader_for(self.order, self.lobes, self.brdf, True, self.width, self.feature_vec4s)
-        batch = gpu.types.GPUBatch(type="POINTS", buf=self.vertices)
-        offscreen = gpu.types.GPUOffScreen(width, height, format="RGBA32F")
-        pixels = gpu.types.Buffer("FLOAT", width * height * 4)  # flat: 3.4's 3D Buffer gives numpy wrong strides
-        try:
-            with offscreen.bind():
-                framebuffer = gpu.state.active_framebuffer_get()
-                framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0))
-                gpu.state.blend_set("NONE")
-                gpu.state.depth_test_set("NONE")
-                if hasattr(gpu.state, "program_point_size_set"):
-                    gpu.state.program_point_size_set(True)
-                shader.bind()
-                self.bind(shader)
-                shader.uniform_float("readback_size", (float(width), float(height)))
-                batch.draw(shader)
-                framebuffer.read_color(0, 0, width, height, 4, 0, "FLOAT", data=pixels)
-                if hasattr(gpu.state, "program_point_size_set"):
-                    gpu.state.program_point_size_set(False)
-        finally:
-            offscreen.free()
-        flat = np.asarray(pixels, dtype=np.float32).reshape(-1, 4)[:n]
-        return np.ascontiguousarray(flat[:, :3]), np.ascontiguousarray(flat[:, 3])
+        return read_back(shader, self.vertices, self.vertex_count, self.bind)
+
+
+def live_texture_count():
+    """GPU textures the preview's models hold now (the model's and the frame's):
+    what an object's cleanup must bring back to its count before."""
+    return sum(len(m.textures) + (m.geometry is not None) for m in list(_live))
 
 
 class FrameInputs:
-    """What one frame uploads, computed on the CPU: geometry texels ((2V, 4),
-    or already a grid: ((W, H), flat)), the pose and shading uniform blocks'
-    bytes, the BRDF."""
+    """What one frame uploads, computed on the CPU: the geometry (6V floats,
+    model_shader.geometry_floats, or already a grid: ((W, H), flat)), the
+    pose and shading uniform blocks' bytes, the BRDF."""
 
     def __init__(self, geometry, pose, shading, brdf):
         preview_shader.check_configuration(1, 1, brdf)
@@ -178,7 +209,7 @@ def frame_inputs(model, features, positions, normals, world, lighting, brdf="dif
     matrix (4, 4) and the lighting (order², 3): what PoseModel.shade takes
     after its world transform."""
     vec4s = model_shader.feature_vec4_count(len(features))
-    return FrameInputs(model_shader.geometry_texels(positions, normals),
-                       model_shader.pose_data(features, vec4s, world),
+    return FrameInputs(model_shader.geometry_floats(positions, normals),
+                       model_shader.pose_data(features, vec4s, world, len(positions)),
                        preview_shader.uniform_data(model.order, lighting, brdf, phong_exponent, camera, transmission),
                        brdf)

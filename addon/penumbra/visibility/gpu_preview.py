@@ -167,21 +167,8 @@ def shader_for(order, lobes, model, readback):
         slot += 1
     info.typedef_source(preview_shader.uniform_block_source(order))
     info.uniform_buf(0, "PenumbraShading", "shading")
-    interface = gpu.types.GPUStageInterfaceInfo(f"penumbra_preview_{'readback' if readback else 'view'}")
-    if readback:
-        interface.flat("VEC4", "result")
-        info.push_constant("VEC2", "readback_size")
-        fragment = preview_shader.FRAGMENT_READBACK
-    else:
-        interface.smooth("VEC3", "shade")
-        info.push_constant("MAT4", "ViewProjectionMatrix")
-        info.push_constant("FLOAT", "depth_bias")
-        fragment = preview_shader.FRAGMENT_VIEWPORT
-    info.vertex_out(interface)
-    info.fragment_out(0, "VEC4", "fragColor")
-    info.vertex_source(preview_shader.vertex_source(order, lobes, model, readback))
-    info.fragment_source(fragment)
-    shader = gpu.shader.create_from_info(info)
+    shader = gpu_model.finish_shader(info, readback, preview_shader.vertex_source(order, lobes, model, readback),
+                                     "penumbra_preview")
     _shaders[key] = shader
     return shader
 
@@ -206,35 +193,10 @@ def shade_offscreen(inputs):
     (gpu_unavailable_reason() is None) and a GPU context: under a window
     (e.g. xvfb-run), or after gpu.init() in the bpy 5.x module."""
     import gpu
-    n = inputs.vertex_count
-    width = min(READBACK_WIDTH, max(n, 1))
-    height = max(1, -(-n // width))
-    shader = shader_for(inputs.order, inputs.lobes, inputs.model, True)
-    batch = gpu.types.GPUBatch(type="POINTS", buf=_vertex_buffer(inputs))
     ubo = gpu.types.GPUUniformBuf(inputs.uniforms)
-    offscreen = gpu.types.GPUOffScreen(width, height, format="RGBA32F")
-    # A flat Buffer to read into: Blender 3.4's (height, width, 4) Buffer
-    # hands numpy wrong strides.
-    pixels = gpu.types.Buffer("FLOAT", width * height * 4)
-    try:
-        with offscreen.bind():
-            framebuffer = gpu.state.active_framebuffer_get()
-            framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0))
-            gpu.state.blend_set("NONE")
-            gpu.state.depth_test_set("NONE")
-            if hasattr(gpu.state, "program_point_size_set"):
-                gpu.state.program_point_size_set(True)
-            shader.bind()
-            shader.uniform_block("shading", ubo)
-            shader.uniform_float("readback_size", (float(width), float(height)))
-            batch.draw(shader)
-            framebuffer.read_color(0, 0, width, height, 4, 0, "FLOAT", data=pixels)
-            if hasattr(gpu.state, "program_point_size_set"):
-                gpu.state.program_point_size_set(False)
-    finally:
-        offscreen.free()
-    flat = np.asarray(pixels, dtype=np.float32).reshape(-1, 4)[:n]
-    return np.ascontiguousarray(flat[:, :3]), np.ascontiguousarray(flat[:, 3])
+    shader = shader_for(inputs.order, inputs.lobes, inputs.model, True)
+    return gpu_model.read_back(shader, _vertex_buffer(inputs), inputs.vertex_count,
+                               lambda bound: bound.uniform_block("shading", ubo), READBACK_WIDTH)
 
 
 class DrawBatch:
@@ -272,6 +234,7 @@ class _Preview:
 _previews = {}        # object name -> _Preview
 _draw_handle = None
 last_timings = {}     # seconds of the last update and upload (read by benchmarks)
+last_drawn = []       # the objects the last draw callback drew (read by tests)
 _uniform_cache = {}   # the shading block's bytes of the last inputs, per object
 
 
@@ -316,11 +279,7 @@ def _read_evaluated_positions(obj, depsgraph, entry):
     evaluated = obj.evaluated_get(depsgraph)
     mesh = evaluated.data
     if len(mesh.vertices) != entry.model.vertex_count:
-        changing = [m.name for m in obj.modifiers if m.show_viewport and m.type != "ARMATURE"]
-        raise VisibilityInputError(
-            f"'{obj.name}' has {len(mesh.vertices)} vertices after its modifiers; the model has "
-            f"{entry.model.vertex_count}: disable {', '.join(changing) or 'the modifiers that add or remove vertices'}, "
-            "or apply them and bake again")
+        return frame_shading._read_positions(obj, depsgraph, entry)  # raises, saying which modifiers to disable
     mesh_data._vertex_positions(mesh, entry.positions)
     return np.array(evaluated.matrix_world, dtype=np.float64)
 
@@ -331,19 +290,18 @@ def frame_of(obj, scene, depsgraph=None):
     lighting and BRDF frame_shading.shade_object uses. Raises
     VisibilityInputError / ValueError / OSError like it."""
     import gpu
-    t0 = time.perf_counter()
+    stamps = [time.perf_counter()]
     entry = frame_shading.loaded_model(obj)
     model = entry.model
     settings = obj.penumbra_visibility
     brdf = settings.brdf.lower()
     check_configuration(model.order, model.lobes, brdf)
-    rotations = armature_data.bone_rotations(armature_data.armature_of(obj), model.joints)
-    features = model.pose_features(rotations)
-    t1 = time.perf_counter()
+    features = model.pose_features(armature_data.bone_rotations(armature_data.armature_of(obj), model.joints))
+    stamps.append(time.perf_counter())
     world = _read_evaluated_positions(obj, depsgraph or bpy.context.evaluated_depsgraph_get(), entry)
-    t2 = time.perf_counter()
+    stamps.append(time.perf_counter())
     normals = entry.mesh.vertex_normals(entry.positions, scene.penumbra.visibility.threads)
-    t3 = time.perf_counter()
+    stamps.append(time.perf_counter())
     max_size = gpu.capabilities.max_texture_size_get()
     grid = _geometry_grids.get(obj.name)
     if grid is None or grid[0] is not entry:
@@ -351,11 +309,11 @@ def frame_of(obj, scene, depsgraph=None):
             model.vertex_count, model_shader.texture_width(max_size), max_size))
     geometry = grid[1].fill(entry.positions, normals)
     frame = gpu_model.FrameInputs(geometry, model_shader.pose_data(
-        features, model_shader.feature_vec4_count(len(features)), world),
+        features, model_shader.feature_vec4_count(len(features)), world, model.vertex_count),
         _shading_bytes(obj, scene, model.order, brdf, settings), brdf)
-    t4 = time.perf_counter()
-    frame.seconds = {"pose_features": t1 - t0, "read_positions": t2 - t1, "normals": t3 - t2, "pack": t4 - t3,
-                     "cpu_total": t4 - t0}
+    stamps.append(time.perf_counter())
+    frame.seconds = dict(zip(("pose_features", "read_positions", "normals", "pack"), np.diff(stamps).tolist()))
+    frame.seconds["cpu_total"] = stamps[-1] - stamps[0]
     return entry, frame
 
 
@@ -455,6 +413,7 @@ def _draw():
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(True)
         gpu.state.blend_set("NONE")
+        last_drawn.clear()
         for name, preview in list(_previews.items()):
             obj = scene.objects.get(name)
             if obj is None or not obj.penumbra_visibility.enabled or not obj.visible_get():
@@ -471,6 +430,7 @@ def _draw():
                 last_timings["upload"] = time.perf_counter() - t0
             if preview.batch is not None and preview.batch.geometry is not None:
                 preview.batch.draw(view_projection, DEPTH_BIAS)
+                last_drawn.append(name)
         gpu.state.depth_mask_set(False)
         gpu.state.depth_test_set("NONE")
     except Exception as error:  # never raise inside Blender's draw loop

@@ -15,9 +15,9 @@ Once per model, four 2D float textures, read with texelFetch, texel i at
 Integers ride in floats: exact below 2^24, which pack_model checks.
 
 Per frame, the uniform block PenumbraPose (the pose's features, 4 a vec4,
-and the object's world matrix split as the CPU splits it) and one RGBA32F
-texture frame_geometry: the evaluated mesh's object-space position and
-normal, 2 texels per vertex (normals by Blender's rule, from the core).
+and the object's world matrix split as the CPU splits it) and one R32F
+texture frame_geometry: the evaluated mesh's object-space positions, then
+its normals (Blender's rule, from the core), one float a texel.
 The vertex reads its own and its reference neighbour's position, so the
 tangent follows the same edge as core/visibility/mesh_frames.hpp's, with the
 same fallback (Duff et al. 2017) where the edge is along the normal.
@@ -91,10 +91,11 @@ def pack_model(blocks, order, lobes, neighbours):
             "model_blocks": block_texels.astype(np.float32).reshape(-1, 4), "model_layout": layout}
 
 
-def pose_data(features, feature_vec4s, world):
+def pose_data(features, feature_vec4s, world, vertex_count):
     """PenumbraPose's bytes: the features, then the world matrix as the core
     splits it (linear, normal matrix = inverse transpose, or identity when
-    singular; offset), columns as vec4s."""
+    singular; offset, its w where frame_geometry's normals start), columns
+    as vec4s."""
     world = np.asarray(world, dtype=np.float64).reshape(4, 4)
     linear = world[:3, :3]
     determinant = np.linalg.det(linear)
@@ -105,6 +106,7 @@ def pose_data(features, feature_vec4s, world):
     data[feature_vec4s:feature_vec4s + 3, :3] = linear.T.astype(np.float32)
     data[feature_vec4s + 3:feature_vec4s + 6, :3] = normal_matrix.T.astype(np.float32)
     data[feature_vec4s + 6, :3] = world[:3, 3]
+    data[feature_vec4s + 6, 3] = 3 * vertex_count
     return data.tobytes()
 
 
@@ -113,35 +115,39 @@ def pose_block_source(feature_vec4s):
             f"  vec4 features[{feature_vec4s}];\n"
             f"  vec4 world_linear[3];\n"          # columns of the world matrix's 3 × 3
             f"  vec4 normal_matrix[3];\n"   # columns of its inverse transpose
-            f"  vec4 offset;\n"
+            f"  vec4 offset;\n"            # w: the first normal's index in frame_geometry
             f"}};\n")
 
 
-def geometry_texels(positions, normals):
-    """frame_geometry's texels: (2V, 4) float32, position then normal per vertex."""
-    texels = np.zeros((len(positions), 2, 4), dtype=np.float32)
-    texels[:, 0, :3] = positions
-    texels[:, 1, :3] = normals
-    return texels.reshape(-1, 4)
+def geometry_floats(positions, normals):
+    """frame_geometry's values: every position, then every normal (6V float32)."""
+    return np.concatenate([np.asarray(positions, dtype=np.float32).reshape(-1),
+                           np.asarray(normals, dtype=np.float32).reshape(-1)])
 
 
 class GeometryGrid:
-    """frame_geometry's padded grid, kept from frame to frame (the texture
-    copies it when made): fill() writes a frame's positions and normals."""
+    """frame_geometry (R32F: one float a texel, so a frame's arrays go in by
+    two contiguous copies, not an interleave), kept from frame to frame (the
+    texture copies it when made): fill() writes a frame's positions and
+    normals."""
 
     def __init__(self, vertex_count, width, max_texture_size):
-        self.size = texture_grid(2 * vertex_count, width, max_texture_size)
-        self.flat = np.zeros(self.size[0] * self.size[1] * 4, dtype=np.float32)
-        self.texels = self.flat[:8 * vertex_count].reshape(-1, 2, 4)
+        self.vertex_count = vertex_count
+        self.size = texture_grid(6 * vertex_count, width, max_texture_size)
+        self.flat = np.zeros(self.size[0] * self.size[1], dtype=np.float32)
 
     def fill(self, positions, normals):
-        self.texels[:, 0, :3] = positions
-        self.texels[:, 1, :3] = normals
+        n = 3 * self.vertex_count
+        self.flat[:n] = np.asarray(positions, dtype=np.float32).reshape(-1)
+        self.flat[n:2 * n] = np.asarray(normals, dtype=np.float32).reshape(-1)
         return self.size, self.flat
 
 
 def helper_source(width):
     return (f"ivec2 texel_at(int i) {{ return ivec2(i % {width}, i / {width}); }}\n"
+            "vec3 geometry_at(int i)\n{\n"
+            "  return vec3(texelFetch(frame_geometry, texel_at(i), 0).r, texelFetch(frame_geometry, texel_at(i + 1), 0).r,\n"
+            "              texelFetch(frame_geometry, texel_at(i + 2), 0).r);\n}\n"
             # Duff et al. 2017 (mesh_frames.cpp basis_from_normal): t from n alone.
             "vec3 tangent_from_normal(vec3 n)\n{\n"
             "  float sign_z = n.z >= 0.0 ? 1.0 : -1.0;\n"
@@ -157,10 +163,10 @@ def main_prologue(order, lobes):
     return [
         "  int vertex = p_vertex;",
         "  vec4 vertex_layout = texelFetch(model_layout, texel_at(vertex), 0);",
-        "  vec3 own = texelFetch(frame_geometry, texel_at(2 * vertex), 0).xyz;",
-        "  vec3 normal_object = texelFetch(frame_geometry, texel_at(2 * vertex + 1), 0).xyz;",
+        "  vec3 own = geometry_at(3 * vertex);",
+        "  vec3 normal_object = geometry_at(int(pose.offset.w) + 3 * vertex);",
         "  int neighbour = int(vertex_layout.z);",
-        "  vec3 other = texelFetch(frame_geometry, texel_at(2 * neighbour), 0).xyz;",
+        "  vec3 other = geometry_at(3 * neighbour);",
         "  mat3 object_to_world = mat3(pose.world_linear[0].xyz, pose.world_linear[1].xyz, pose.world_linear[2].xyz);",
         "  mat3 normal_matrix = mat3(pose.normal_matrix[0].xyz, pose.normal_matrix[1].xyz, pose.normal_matrix[2].xyz);",
         "  vec3 p_position = object_to_world * own + pose.offset.xyz;",

@@ -15,12 +15,10 @@ under a uniform World of radiance 1; plus a few configurations under random
 lighting. Prints one line `RESULT {json}`.
 """
 
-import json
 import math
 import os
 import sys
 import time
-import traceback
 
 import bpy
 import numpy as np
@@ -37,7 +35,9 @@ if "--gpu-init" in ARGS:
     import gpu
     gpu.init()
 
+sys.path.append(ROOT)  # bench.helpers
 import penumbra  # noqa: E402
+from bench.helpers.blender_result import report  # noqa: E402
 from penumbra import native  # noqa: E402
 from penumbra.visibility import gpu_model, gpu_preview  # noqa: E402
 
@@ -131,33 +131,24 @@ def compare(order, lobes, brdf, mesh, rng, lighting=None):
             "constant_vertices": int(np.sum(np.diff(model.stored_blocks()["joint_offsets"]) == 0))}
 
 
-def main():
-    result = {"blender": bpy.app.version_string, "background": bool(bpy.app.background)}
-    try:
-        import gpu
-        penumbra.register()
-        result["unavailable"] = gpu_preview.gpu_unavailable_reason()
-        result["renderer"] = f"{gpu.platform.renderer_get()} / {gpu.platform.version_get()}"
-        rng = np.random.default_rng(2027)
-        mesh = sheet(VERTICES)
-        result["vertices"] = len(mesh[0])
-        started = time.perf_counter()
-        cases = [compare(order, lobes, brdf, mesh, rng) for brdf in ("diffuse", "phong", "translucent")
-                 for order in range(1, 9) for lobes in range(1, 5)]
-        for brdf in ("diffuse", "phong", "translucent"):
-            lighting = rng.normal(0.0, 0.5, (16, 3))
-            lighting[0] = 2.0
-            cases.append(dict(compare(4, 2, brdf, mesh, rng, lighting), lighting="random"))
-        result["seconds"] = round(time.perf_counter() - started, 1)
-        result["cases"] = cases
-        penumbra.unregister()
-        result["ok"] = True
-    except Exception:
-        result["ok"] = False
-        result["error"] = traceback.format_exc()
-    print("RESULT " + json.dumps(result), flush=True)
+def check(result):
+    import gpu
+    penumbra.register()
+    result["unavailable"] = gpu_preview.gpu_unavailable_reason()
+    result["renderer"] = f"{gpu.platform.renderer_get()} / {gpu.platform.version_get()}"
+    rng = np.random.default_rng(2027)
+    mesh = sheet(VERTICES)
+    result["vertices"] = len(mesh[0])
+    started = time.perf_counter()
+    cases = [compare(order, lobes, brdf, mesh, rng) for brdf in ("diffuse", "phong", "translucent")
+             for order in range(1, 9) for lobes in range(1, 5)]
+    for brdf in ("diffuse", "phong", "translucent"):
+        lighting = rng.normal(0.0, 0.5, (16, 3))
+        lighting[0] = 2.0
+        cases.append(dict(compare(4, 2, brdf, mesh, rng, lighting), lighting="random"))
+    result["seconds"] = round(time.perf_counter() - started, 1)
+    result["cases"] = cases
+    penumbra.unregister()
 
 
-main()
-if not bpy.app.background:
-    bpy.ops.wm.quit_blender()
+report(check)

@@ -21,13 +21,11 @@ window) the viewport's own redraw with the preview on and off.
 Prints one line `RESULT {json}`.
 """
 
-import json
 import math
 import os
 import statistics
 import sys
 import time
-import traceback
 
 import bpy
 import numpy as np
@@ -52,7 +50,9 @@ if "--gpu-init" in ARGS:
     import gpu
     gpu.init()
 
+sys.path.append(ROOT)  # bench.helpers
 import penumbra  # noqa: E402
+from bench.helpers.blender_result import report  # noqa: E402
 from penumbra.visibility import frame_shading, gpu_preview  # noqa: E402
 import visibility_character  # noqa: E402
 
@@ -353,32 +353,22 @@ def timing(scene, obj, repeats=3):
     return out
 
 
-def main():
-    result = {"blender": bpy.app.version_string, "background": bool(bpy.app.background)}
-    try:
-        import gpu
-        penumbra.register()
-        result["unavailable"] = gpu_preview.gpu_unavailable_reason()
-        result["renderer"] = f"{gpu.platform.renderer_get()} / {gpu.platform.version_get()}"
-        scene, obj, bake_seconds = baked_character(VERTICES)
-        result["bake_seconds"] = round(bake_seconds, 2)
-        result["pipeline"] = pipeline_comparison(scene, obj)
-        result["random"] = random_comparison(RANDOM_VERTICES, SWEEP)
-        result["timing"] = [timing(scene, obj)]
-        if TIMING_VERTICES:
-            frame_shading.forget()
-            scene, obj, bake_seconds = baked_character(TIMING_VERTICES, frames=8, rays=16)
-            result["timing"].append(timing(scene, obj))
-            result["timing"][-1]["bake_seconds"] = round(bake_seconds, 2)
-        penumbra.unregister()
-        result["ok"] = True
-    except Exception:
-        result["ok"] = False
-        result["error"] = traceback.format_exc()
-    print("RESULT " + json.dumps(result), flush=True)
+def check(result):
+    import gpu
+    penumbra.register()
+    result["unavailable"] = gpu_preview.gpu_unavailable_reason()
+    result["renderer"] = f"{gpu.platform.renderer_get()} / {gpu.platform.version_get()}"
+    scene, obj, bake_seconds = baked_character(VERTICES)
+    result["bake_seconds"] = round(bake_seconds, 2)
+    result["pipeline"] = pipeline_comparison(scene, obj)
+    result["random"] = random_comparison(RANDOM_VERTICES, SWEEP)
+    result["timing"] = [timing(scene, obj)]
+    if TIMING_VERTICES:
+        frame_shading.forget()
+        scene, obj, bake_seconds = baked_character(TIMING_VERTICES, frames=8, rays=16)
+        result["timing"].append(timing(scene, obj))
+        result["timing"][-1]["bake_seconds"] = round(bake_seconds, 2)
+    penumbra.unregister()
 
 
-main()
-if not bpy.app.background:
-    # A window's Blender would stay open after the script: quit it as a user would.
-    bpy.ops.wm.quit_blender()
+report(check)
