@@ -16,7 +16,6 @@ its texture layout, its load time and the draw time at 1280×720. Prints one
 line `RESULT {json}`.
 """
 
-import math
 import os
 import statistics
 import sys
@@ -41,7 +40,7 @@ sys.path.append(ROOT)
 import penumbra  # noqa: E402
 from bench.helpers.blender_result import report  # noqa: E402
 from penumbra.visibility import gpu_preview  # noqa: E402
-from bench.helpers.gpu_preview_scene import character  # noqa: E402
+from bench.helpers.gpu_preview_scene import character, gpu_draw_seconds  # noqa: E402
 
 
 def view3d():
@@ -126,40 +125,6 @@ def frame_costs(scene, override):
             "on_frame_and_redraw_ms": ms(on_redraw) if override else None}
 
 
-def draw_seconds(batch, width=1280, height=720, repeats=3):
-    import gpu
-    from mathutils import Matrix, Vector
-    eye, target = Vector((2.0, -5.0, 2.0)), Vector((0.0, 0.0, 1.3))
-    forward = (target - eye).normalized()
-    right = forward.cross(Vector((0.0, 0.0, 1.0))).normalized()
-    up = right.cross(forward)
-    view = Matrix((tuple(right) + (-right.dot(eye),), tuple(up) + (-up.dot(eye),),
-                   tuple(-forward) + (forward.dot(eye),), (0.0, 0.0, 0.0, 1.0)))
-    f, near, far = 1.0 / math.tan(math.radians(20.0)), 0.1, 100.0
-    projection = Matrix(((f * height / width, 0, 0, 0), (0, f, 0, 0),
-                         (0, 0, (far + near) / (near - far), 2 * far * near / (near - far)), (0, 0, -1, 0)))
-    offscreen = gpu.types.GPUOffScreen(width, height)
-    pixel = gpu.types.Buffer("FLOAT", 4)
-    samples = []
-    try:
-        with offscreen.bind():
-            framebuffer = gpu.state.active_framebuffer_get()
-            for k in range(repeats + 1):
-                t = time.perf_counter()
-                framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
-                gpu.state.depth_test_set("LESS_EQUAL")
-                gpu.state.depth_mask_set(True)
-                batch.draw(projection @ view, gpu_preview.DEPTH_BIAS)
-                framebuffer.read_color(width // 2, height // 2, 1, 1, 4, 0, "FLOAT", data=pixel)
-                if k:
-                    samples.append(time.perf_counter() - t)
-            gpu.state.depth_mask_set(False)
-            gpu.state.depth_test_set("NONE")
-    finally:
-        offscreen.free()
-    return statistics.median(samples)
-
-
 def measure(vertices, tmp, override):
     t = time.perf_counter()
     scene, obj = character(vertices, tmp)
@@ -181,7 +146,8 @@ def measure(vertices, tmp, override):
                 "gpu_frame_bytes_per_vertex": round(geometry / out["vertices"], 1),
                 "texture_layout": {k: list(v) for k, v in on_gpu.layout.items()},
                 "geometry_layout": list(frame.geometry[0]),
-                "draw_1280x720_ms": round(1000.0 * draw_seconds(on_gpu), 2)})
+                "draw_1280x720_ms": round(1000.0 * gpu_draw_seconds(
+                    lambda view_projection: on_gpu.draw(view_projection, gpu_preview.DEPTH_BIAS), repeats=3)[0], 2)})
     return out
 
 

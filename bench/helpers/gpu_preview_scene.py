@@ -7,7 +7,9 @@ Runs inside Blender."""
 
 import math
 import os
+import statistics
 import sys
+import time
 
 import bpy
 import numpy as np
@@ -74,3 +76,48 @@ def character(vertices, tmp, name="PenumbraCharacter", empty=True, seed=27):
     obj.penumbra_visibility.enabled = True
     scene.penumbra.visibility.live_update = False
     return scene, obj
+
+
+def _look_at_character(width, height):
+    """A view-projection matrix framing the character (as the viewport would)."""
+    from mathutils import Matrix, Vector
+    eye, target = Vector((2.0, -5.0, 2.0)), Vector((0.0, 0.0, 1.3))
+    forward = (target - eye).normalized()
+    right = forward.cross(Vector((0.0, 0.0, 1.0))).normalized()
+    up = right.cross(forward)
+    view = Matrix((tuple(right) + (-right.dot(eye),), tuple(up) + (-up.dot(eye),),
+                   tuple(-forward) + (forward.dot(eye),), (0.0, 0.0, 0.0, 1.0)))
+    f, near, far, aspect = 1.0 / math.tan(math.radians(20.0)), 0.1, 100.0, width / height
+    projection = Matrix(((f / aspect, 0, 0, 0), (0, f, 0, 0),
+                         (0, 0, (far + near) / (near - far), 2 * far * near / (near - far)), (0, 0, -1, 0)))
+    return projection @ view
+
+
+def gpu_draw_seconds(draw, width=1280, height=720, repeats=5):
+    """draw(view_projection) into a viewport-sized buffer with depth, synchronized by a
+    readback, framing the character: (median seconds, pixels covered)."""
+    import gpu
+    offscreen = gpu.types.GPUOffScreen(width, height)
+    view_projection = _look_at_character(width, height)
+    pixel = gpu.types.Buffer("FLOAT", 4)
+    samples, covered = [], 0
+    try:
+        with offscreen.bind():
+            framebuffer = gpu.state.active_framebuffer_get()
+            for k in range(repeats + 1):
+                t = time.perf_counter()
+                framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
+                gpu.state.depth_test_set("LESS_EQUAL")
+                gpu.state.depth_mask_set(True)
+                draw(view_projection)
+                framebuffer.read_color(width // 2, height // 2, 1, 1, 4, 0, "FLOAT", data=pixel)
+                if k:
+                    samples.append(time.perf_counter() - t)
+            image = gpu.types.Buffer("FLOAT", width * height * 4)
+            framebuffer.read_color(0, 0, width, height, 4, 0, "FLOAT", data=image)
+            covered = int(np.count_nonzero(np.asarray(image).reshape(-1, 4)[:, 3] > 0.0))
+            gpu.state.depth_mask_set(False)
+            gpu.state.depth_test_set("NONE")
+    finally:
+        offscreen.free()
+    return statistics.median(samples), covered

@@ -26,6 +26,15 @@ _live = weakref.WeakSet()  # every ModelOnGpu not yet freed (live_texture_count)
 _shaders = {}  # (order, lobes, brdf, readback, width, feature vec4s) -> GPUShader
 
 
+def shader_info(order):
+    """A shader's description with the SH order's defines."""
+    import gpu
+    info = gpu.types.GPUShaderCreateInfo()
+    info.define("ORDER", str(order))
+    info.define("NC", str(order * order))
+    return info
+
+
 def finish_shader(info, readback, vertex_source, name):
     """The stage interface, push constants and fragment stage both preview
     paths share (readback: one vertex a pixel of an RGBA32F buffer; else the
@@ -81,14 +90,11 @@ def read_back(shader, vertices, vertex_count, bind, readback_width=1024):
 
 
 def shader_for(order, lobes, brdf, readback, width, feature_vec4s):
-    import gpu
     key = (order, lobes, brdf, readback, width, feature_vec4s)
     shader = _shaders.get(key)
     if shader is not None:
         return shader
-    info = gpu.types.GPUShaderCreateInfo()
-    info.define("ORDER", str(order))
-    info.define("NC", str(order * order))
+    info = shader_info(order)
     info.vertex_in(0, "INT", "p_vertex")
     for slot, name in enumerate(("model_weights", "model_bias", "model_blocks", "model_layout", "frame_geometry")):
         info.sampler(slot, "FLOAT_2D", name)

@@ -150,14 +150,11 @@ _shaders = {}  # (order, lobes, model, readback) -> GPUShader
 
 def shader_for(order, lobes, model, readback):
     """The compiled shader of one configuration (cached)."""
-    import gpu
     key = (order, lobes, model, readback)
     shader = _shaders.get(key)
     if shader is not None:
         return shader
-    info = gpu.types.GPUShaderCreateInfo()
-    info.define("ORDER", str(order))
-    info.define("NC", str(order * order))
+    info = gpu_model.shader_info(order)
     slot = 0
     for name in ("p_position", "p_normal", "p_tangent"):
         info.vertex_in(slot, "VEC3", name)
