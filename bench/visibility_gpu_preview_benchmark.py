@@ -49,7 +49,7 @@ def goal_table(results):
 
 
 def split_table(results):
-    keys = ["pose_features", "read_positions", "normals", "pack", "upload"]
+    keys = ["pose_features", "read_positions", "pack", "upload"]
     rows = ["| Blender | vertices | " + " | ".join(keys) + " |", "|---|---:|" + "---:|" * len(keys)]
     for r in results:
         for s in r["sizes"]:
@@ -105,7 +105,7 @@ shading against the CPU's: tests/python/visibility/test_gpu_model_in_blender.py 
 ## Frame change (issue 27 goal: on ≤ 1.5× off)
 
 "On" is `scene.frame_set` with the preview on (its handler: the pose's features, the evaluated mesh's
-positions, the normals, packing) plus the draw callback's upload (one texture, two uniform blocks); the
+positions, packing) plus the draw callback's upload (one texture, two uniform blocks); the
 GL draw itself is excluded. "Preview's own CPU" is the handler's work plus the upload.
 
 {goal_table(results)}
@@ -117,7 +117,8 @@ GL draw itself is excluded. "Preview's own CPU" is the handler's work plus the u
 ## GPU memory, load, draw
 
 The model's textures: model_weights RGBA16F (the stored binary16 weights, rows padded to whole texels),
-model_bias, model_blocks and model_layout RGBA32F; per frame frame_geometry R32F (positions, then normals).
+model_bias, model_blocks, model_layout and model_corners RGBA32F, model_loops R32F (the polygons, from which
+the shader takes the vertex normals); per frame frame_geometry R32F (the positions).
 Textures are 4096 texels wide (the limit here is {results[0]['max_texture_size']}); the height follows.
 
 {gpu_table(results)}

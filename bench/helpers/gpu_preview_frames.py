@@ -58,10 +58,11 @@ def view3d():
 
 def redraw(override):
     if override is None:  # no window: the draw callback's upload, called as it would
-        for preview in gpu_preview._previews.values():
+        for name, preview in gpu_preview._previews.items():
             if preview.batch is None:
-                from penumbra.visibility import gpu_model
+                from penumbra.visibility import gpu_model, mesh_data
                 preview.batch = gpu_model.ModelOnGpu(preview.entry.model, preview.entry.neighbours,
+                                                     mesh_data.polygon_topology(bpy.context.scene.objects[name].data),
                                                      preview.entry.buffers.triangles)
             if preview.frame is not None:
                 t = time.perf_counter()
@@ -88,11 +89,10 @@ def frame_costs(scene, override):
     for k in range(2 * FRAMES + 2):
         preview = k % 2 == 1
         settings.gpu_preview = preview
-        redraw(override)  # the toggle's own work is done before the timed frame
-        if override is not None:
-            # llvmpipe rasterizes the redraw in its own threads after the call
-            # returns: let it finish, or it competes with the timed frame.
-            time.sleep(SETTLE_SECONDS)
+        redraw(override)  # the toggle's own work (the model's upload) is done before the timed frame
+        # llvmpipe rasterizes and uploads in its own threads after the calls
+        # return: let it finish, or it competes with the timed frame.
+        time.sleep(SETTLE_SECONDS)
         frame = 2 + (frame - 1) % 22
         t = time.perf_counter()
         scene.frame_set(frame)
@@ -131,16 +131,17 @@ def measure(vertices, tmp, override):
     out = {"vertices": len(obj.data.vertices), "build_seconds": round(time.perf_counter() - t, 1)}
     out.update(frame_costs(scene, override))
     # The model's load: file to the GPU's textures.
-    from penumbra.visibility import frame_shading, gpu_model
+    from penumbra.visibility import frame_shading, gpu_model, mesh_data
     frame_shading.forget()
     t = time.perf_counter()
     entry = frame_shading.loaded_model(obj)
     loaded = time.perf_counter()
-    on_gpu = gpu_model.ModelOnGpu(entry.model, entry.neighbours, entry.buffers.triangles)
+    on_gpu = gpu_model.ModelOnGpu(entry.model, entry.neighbours, mesh_data.polygon_topology(obj.data),
+                                  entry.buffers.triangles)
     uploaded = time.perf_counter()
     _, frame = gpu_preview.frame_of(obj, scene)
     on_gpu.set_frame(frame)
-    geometry = frame.geometry[0][0] * frame.geometry[0][1] * 4
+    geometry = frame.geometry[0][0] * frame.geometry[0][1] * 4  # R32F
     out.update({"load_file_s": round(loaded - t, 3), "load_gpu_s": round(uploaded - loaded, 3),
                 "gpu_model_bytes_per_vertex": round(on_gpu.bytes / out["vertices"], 1),
                 "gpu_frame_bytes_per_vertex": round(geometry / out["vertices"], 1),

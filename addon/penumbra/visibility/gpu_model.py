@@ -2,16 +2,17 @@
 (model_shader.py says what each holds), evaluated per vertex in the preview's
 vertex shader with the §4.3 steps of preview_shader.py. Per frame only the
 pose's features, the world matrix and the lighting (uniform blocks) and the
-evaluated mesh's positions and normals (one texture) go to the GPU.
+evaluated mesh's positions (one texture) go to the GPU; the shader takes the
+vertex normals from them by Blender's rule, as the CPU shading does.
 
 Why the evaluated mesh and not skinning in the shader: Blender evaluates the
 armature (and any other deform, shape keys included) on the CPU for its own
-drawing anyway, and the CPU shading's frames use the normals of that
-evaluated mesh (Blender's rule, from the core): uploading it keeps the GPU
-exactly on the CPU's geometry for every modifier stack, where skinning in the
-shader would need the armature modifier's exact rule, a fallback for every
-other deform, and the normals rebuilt from skinned neighbours.
-docs/visibility-gpu-preview-benchmark.md has what the copy costs.
+drawing anyway, and reading its positions costs 0.4 ms at 100k vertices;
+uploading them keeps the GPU exactly on the CPU's geometry for every
+modifier stack, where skinning in the shader would need the armature
+modifier's exact rule (weights normalization, preserve volume, multi
+modifiers) and a fallback for every other deform, to save that read.
+docs/visibility-gpu-preview-benchmark.md has what each step costs.
 
 Needs a GPU context (a viewport draw, xvfb-run, or gpu.init() in bpy 5.x).
 """
@@ -96,7 +97,8 @@ def shader_for(order, lobes, brdf, readback, width, feature_vec4s):
         return shader
     info = shader_info(order)
     info.vertex_in(0, "INT", "p_vertex")
-    for slot, name in enumerate(("model_weights", "model_bias", "model_blocks", "model_layout", "frame_geometry")):
+    for slot, name in enumerate(("model_weights", "model_bias", "model_blocks", "model_layout", "model_corners",
+                                 "model_loops", "frame_geometry")):
         info.sampler(slot, "FLOAT_2D", name)
     info.typedef_source(preview_shader.uniform_block_source(order) + model_shader.pose_block_source(feature_vec4s))
     info.uniform_buf(0, "PenumbraShading", "shading")
@@ -114,10 +116,11 @@ def _texture(size, flat, texture_format):
 
 class ModelOnGpu:
     """One model's textures, its vertex-index buffer and triangles: made once,
-    kept while the model and mesh stay the same. `layout` names each
+    kept while the model and mesh stay the same. polygons: (sizes, vertex
+    loops) as mesh_data.polygon_topology gives them. `layout` names each
     texture's (width, height), `bytes` what they and the buffers take."""
 
-    def __init__(self, model, neighbours, triangles=None):
+    def __init__(self, model, neighbours, polygons, triangles=None):
         import gpu
         self.order, self.lobes, self.vertex_count = model.order, model.lobes, model.vertex_count
         self.max_texture_size = gpu.capabilities.max_texture_size_get()
@@ -126,12 +129,14 @@ class ModelOnGpu:
         self.feature_count = int(blocks["feature_offsets"][-1])
         self.feature_vec4s = model_shader.feature_vec4_count(self.feature_count)
         self.textures, self.layout, self.bytes = {}, {}, 0
-        for name, texels in model_shader.pack_model(blocks, model.order, model.lobes, neighbours).items():
-            size, flat = model_shader.grid_array(texels, self.width, self.max_texture_size)
-            texture_format = "RGBA16F" if name == "model_weights" else "RGBA32F"
+        formats = {"model_weights": ("RGBA16F", 8), "model_loops": ("R32F", 4)}
+        for name, texels in model_shader.pack_model(blocks, model.order, model.lobes, neighbours, *polygons).items():
+            texture_format, texel_bytes = formats.get(name, ("RGBA32F", 16))
+            size, flat = model_shader.grid_array(texels.reshape(-1, 4 if texel_bytes != 4 else 1), self.width,
+                                                 self.max_texture_size)
             self.textures[name] = _texture(size, flat, texture_format)
             self.layout[name] = size
-            self.bytes += size[0] * size[1] * (8 if texture_format == "RGBA16F" else 16)
+            self.bytes += size[0] * size[1] * texel_bytes
         vertex_format = gpu.types.GPUVertFormat()
         vertex_format.attr_add(id="p_vertex", comp_type="I32", len=1, fetch_mode="INT")
         self.vertices = gpu.types.GPUVertBuf(vertex_format, self.vertex_count)
@@ -156,7 +161,7 @@ class ModelOnGpu:
             size, flat = frame.geometry
         else:
             grid = model_shader.GeometryGrid(self.vertex_count, self.width, self.max_texture_size)
-            size, flat = grid.fill(*np.split(frame.geometry, 2))
+            size, flat = grid.fill(frame.geometry)
         self.geometry = _texture(size, flat, "R32F")
         self.pose_bytes = frame.pose
         if self.pose is None:
@@ -199,7 +204,7 @@ def live_texture_count():
 
 
 class FrameInputs:
-    """What one frame uploads, computed on the CPU: the geometry (6V floats,
+    """What one frame uploads, computed on the CPU: the positions (3V floats,
     model_shader.geometry_floats, or already a grid: ((W, H), flat)), the
     pose and shading uniform blocks' bytes, the BRDF."""
 
@@ -209,13 +214,13 @@ class FrameInputs:
         self.seconds = {}
 
 
-def frame_inputs(model, features, positions, normals, world, lighting, brdf="diffuse", phong_exponent=16.0,
+def frame_inputs(model, features, positions, world, lighting, brdf="diffuse", phong_exponent=16.0,
                  camera=(0.0, 0.0, 0.0), transmission=(0.5, 0.5, 0.5)):
-    """FrameInputs from object-space positions and normals (V, 3), the world
-    matrix (4, 4) and the lighting (order², 3): what PoseModel.shade takes
-    after its world transform."""
+    """FrameInputs from object-space positions (V, 3), the world matrix (4, 4)
+    and the lighting (order², 3): what PoseModel.shade takes after its world
+    transform (the normals come from the positions, on the GPU)."""
     vec4s = model_shader.feature_vec4_count(len(features))
-    return FrameInputs(model_shader.geometry_floats(positions, normals),
-                       model_shader.pose_data(features, vec4s, world, len(positions)),
+    return FrameInputs(model_shader.geometry_floats(positions),
+                       model_shader.pose_data(features, vec4s, world),
                        preview_shader.uniform_data(model.order, lighting, brdf, phong_exponent, camera, transmission),
                        brdf)

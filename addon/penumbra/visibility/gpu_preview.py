@@ -11,9 +11,9 @@ uploaded once (its stored binary16 blocks, scales, joint directions and
 per-vertex layout, as textures), and the vertex shader evaluates §4.3 step 1
 (the linear model, the lobes) and the vertex frame before steps 2–5. Per
 frame the CPU reads the pose's joint features (the core, a few microseconds),
-the evaluated mesh's positions, its normals by Blender's rule (the core, GIL
-released), the lighting and the camera (frame_inputs); the draw callback
-uploads them (one texture, two uniform blocks) and draws. Neither ever
+the evaluated mesh's positions, the lighting and the camera (frame_of); the
+draw callback uploads them (one texture, two uniform blocks) and draws; the
+shader takes the normals from the positions by Blender's rule. Neither ever
 raises into Blender: problems go to the scene's `gpu_preview_status`.
 
 object_inputs / inputs_from_arrays / DrawBatch / shade_offscreen are the
@@ -297,19 +297,16 @@ def frame_of(obj, scene, depsgraph=None):
     stamps.append(time.perf_counter())
     world = _read_evaluated_positions(obj, depsgraph or bpy.context.evaluated_depsgraph_get(), entry)
     stamps.append(time.perf_counter())
-    normals = entry.mesh.vertex_normals(entry.positions, scene.penumbra.visibility.threads)
-    stamps.append(time.perf_counter())
     max_size = gpu.capabilities.max_texture_size_get()
     grid = _geometry_grids.get(obj.name)
     if grid is None or grid[0] is not entry:
         grid = _geometry_grids[obj.name] = (entry, model_shader.GeometryGrid(
             model.vertex_count, model_shader.texture_width(max_size), max_size))
-    geometry = grid[1].fill(entry.positions, normals)
-    frame = gpu_model.FrameInputs(geometry, model_shader.pose_data(
-        features, model_shader.feature_vec4_count(len(features)), world, model.vertex_count),
+    frame = gpu_model.FrameInputs(grid[1].fill(entry.positions), model_shader.pose_data(
+        features, model_shader.feature_vec4_count(len(features)), world),
         _shading_bytes(obj, scene, model.order, brdf, settings), brdf)
     stamps.append(time.perf_counter())
-    frame.seconds = dict(zip(("pose_features", "read_positions", "normals", "pack"), np.diff(stamps).tolist()))
+    frame.seconds = dict(zip(("pose_features", "read_positions", "pack"), np.diff(stamps).tolist()))
     frame.seconds["cpu_total"] = stamps[-1] - stamps[0]
     return entry, frame
 
@@ -418,7 +415,8 @@ def _draw():
             t0 = time.perf_counter()
             if preview.batch is None and preview.entry is not None and preview.frame is not None:
                 entry = preview.entry
-                preview.batch = gpu_model.ModelOnGpu(entry.model, entry.neighbours, entry.buffers.triangles)
+                preview.batch = gpu_model.ModelOnGpu(entry.model, entry.neighbours, mesh_data.polygon_topology(obj.data),
+                                                     entry.buffers.triangles)
                 last_timings["model_upload"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
             if preview.frame is not None and preview.batch is not None:

@@ -14,10 +14,16 @@ Once per model, four 2D float textures, read with texelFetch, texel i at
   neighbour, 0).
 Integers ride in floats: exact below 2^24, which pack_model checks.
 
+- model_corners (RGBA32F): each vertex's polygon corners (polygon's first
+  loop, size, the corner's place), vertex after vertex, model_layout's w
+  saying where each vertex's start; model_loops (R32F): the polygons'
+  vertices. The vertex normals come from these (Blender's rule, as the CPU
+  computes them), so no normal crosses the bus per frame.
+
 Per frame, the uniform block PenumbraPose (the pose's features, 4 a vec4,
 and the object's world matrix split as the CPU splits it) and one R32F
-texture frame_geometry: the evaluated mesh's object-space positions, then
-its normals (Blender's rule, from the core), one float a texel.
+texture frame_geometry: the evaluated mesh's object-space positions, one
+float a texel.
 The vertex reads its own and its reference neighbour's position, so the
 tangent follows the same edge as core/visibility/mesh_frames.hpp's, with the
 same fallback (Duff et al. 2017) where the edge is along the normal.
@@ -61,10 +67,11 @@ def feature_vec4_count(feature_count):
     return -(-need // FEATURE_VEC4_STEP) * FEATURE_VEC4_STEP
 
 
-def pack_model(blocks, order, lobes, neighbours):
-    """The four model textures' texels from PoseModel.stored_blocks() and the
-    reference neighbours: {'model_weights', 'model_bias', 'model_blocks',
-    'model_layout': (N, 4) float32}."""
+def pack_model(blocks, order, lobes, neighbours, polygon_sizes, polygon_vertices):
+    """The model textures' texels from PoseModel.stored_blocks(), the
+    reference neighbours and the polygons: {'model_weights', 'model_bias',
+    'model_blocks', 'model_layout', 'model_corners': (N, 4) float32,
+    'model_loops': (N,) float32}."""
     d = lobes * (2 + order)
     rows_per_texel = texels_per_row(order, lobes)
     bias = np.asarray(blocks["bias"], dtype=np.float32).reshape(-1, d)
@@ -83,19 +90,42 @@ def pack_model(blocks, order, lobes, neighbours):
     first_row = np.concatenate([[0], np.cumsum(directions)[:-1]]) if len(directions) else np.zeros(0)
     block_texels = np.stack([feature_offsets[np.asarray(blocks["joint_index"], dtype=np.int64)], directions,
                              np.asarray(blocks["weight_scales"], dtype=np.float64), first_row], axis=1)
-    layout = np.zeros((vertex_count, 4), dtype=np.float32)
-    layout[:, 0] = joint_offsets[:-1]
-    layout[:, 1] = np.diff(joint_offsets)
-    layout[:, 2] = np.asarray(neighbours, dtype=np.int64)
+    corners, corner_start = incident_corners(vertex_count, polygon_sizes, polygon_vertices)
+    # One texel more than the vertices: the last one's w ends the last vertex's corners.
+    layout = np.zeros((vertex_count + 1, 4), dtype=np.float32)
+    layout[:-1, 0] = joint_offsets[:-1]
+    layout[:-1, 1] = np.diff(joint_offsets)
+    layout[:-1, 2] = np.asarray(neighbours, dtype=np.int64)
+    layout[:, 3] = corner_start
     return {"model_weights": padded.reshape(-1, 4), "model_bias": bias_padded.reshape(-1, 4),
-            "model_blocks": block_texels.astype(np.float32).reshape(-1, 4), "model_layout": layout}
+            "model_blocks": block_texels.astype(np.float32).reshape(-1, 4), "model_layout": layout,
+            "model_corners": corners, "model_loops": np.asarray(polygon_vertices, dtype=np.float32)}
 
 
-def pose_data(features, feature_vec4s, world, vertex_count):
+def incident_corners(vertex_count, polygon_sizes, polygon_vertices):
+    """Each vertex's polygon corners, vertex after vertex and, within one, in
+    ascending polygon order (Blender's, core/visibility/vertex_normals.cpp):
+    texels (polygon's first loop, its size, the corner's place in it, 0),
+    and where each vertex's start (V + 1)."""
+    sizes = np.asarray(polygon_sizes, dtype=np.int64)
+    loops = np.asarray(polygon_vertices, dtype=np.int64)
+    if len(loops) >= EXACT_INTEGER:
+        raise ValueError(f"the GPU preview indexes at most {EXACT_INTEGER - 1} polygon corners")
+    face_start = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    face = np.repeat(np.arange(len(sizes)), sizes)
+    order = np.argsort(loops, kind="stable")
+    corners = np.zeros((len(loops), 4), dtype=np.float32)
+    corners[:, 0] = face_start[face[order]]
+    corners[:, 1] = sizes[face[order]]
+    corners[:, 2] = order - face_start[face[order]]
+    start = np.concatenate([[0], np.cumsum(np.bincount(loops, minlength=vertex_count))])
+    return corners, start
+
+
+def pose_data(features, feature_vec4s, world):
     """PenumbraPose's bytes: the features, then the world matrix as the core
     splits it (linear, normal matrix = inverse transpose, or identity when
-    singular; offset, its w where frame_geometry's normals start), columns
-    as vec4s."""
+    singular; offset), columns as vec4s."""
     world = np.asarray(world, dtype=np.float64).reshape(4, 4)
     linear = world[:3, :3]
     determinant = np.linalg.det(linear)
@@ -106,7 +136,6 @@ def pose_data(features, feature_vec4s, world, vertex_count):
     data[feature_vec4s:feature_vec4s + 3, :3] = linear.T.astype(np.float32)
     data[feature_vec4s + 3:feature_vec4s + 6, :3] = normal_matrix.T.astype(np.float32)
     data[feature_vec4s + 6, :3] = world[:3, 3]
-    data[feature_vec4s + 6, 3] = 3 * vertex_count
     return data.tobytes()
 
 
@@ -115,31 +144,27 @@ def pose_block_source(feature_vec4s):
             f"  vec4 features[{feature_vec4s}];\n"
             f"  vec4 world_linear[3];\n"          # columns of the world matrix's 3 × 3
             f"  vec4 normal_matrix[3];\n"   # columns of its inverse transpose
-            f"  vec4 offset;\n"            # w: the first normal's index in frame_geometry
+            f"  vec4 offset;\n"
             f"}};\n")
 
 
-def geometry_floats(positions, normals):
-    """frame_geometry's values: every position, then every normal (6V float32)."""
-    return np.concatenate([np.asarray(positions, dtype=np.float32).reshape(-1),
-                           np.asarray(normals, dtype=np.float32).reshape(-1)])
+def geometry_floats(positions):
+    """frame_geometry's values: every position (3V float32)."""
+    return np.asarray(positions, dtype=np.float32).reshape(-1)
 
 
 class GeometryGrid:
-    """frame_geometry (R32F: one float a texel, so a frame's arrays go in by
-    two contiguous copies, not an interleave), kept from frame to frame (the
-    texture copies it when made): fill() writes a frame's positions and
-    normals."""
+    """frame_geometry (R32F, one float a texel: a frame's positions go in by
+    one contiguous copy), kept from frame to frame (the texture copies it
+    when made)."""
 
     def __init__(self, vertex_count, width, max_texture_size):
         self.vertex_count = vertex_count
-        self.size = texture_grid(6 * vertex_count, width, max_texture_size)
+        self.size = texture_grid(3 * vertex_count, width, max_texture_size)
         self.flat = np.zeros(self.size[0] * self.size[1], dtype=np.float32)
 
-    def fill(self, positions, normals):
-        n = 3 * self.vertex_count
-        self.flat[:n] = np.asarray(positions, dtype=np.float32).reshape(-1)
-        self.flat[n:2 * n] = np.asarray(normals, dtype=np.float32).reshape(-1)
+    def fill(self, positions):
+        self.flat[:3 * self.vertex_count] = np.asarray(positions, dtype=np.float32).reshape(-1)
         return self.size, self.flat
 
 
@@ -148,6 +173,34 @@ def helper_source(width):
             "vec3 geometry_at(int i)\n{\n"
             "  return vec3(texelFetch(frame_geometry, texel_at(i), 0).r, texelFetch(frame_geometry, texel_at(i + 1), 0).r,\n"
             "              texelFetch(frame_geometry, texel_at(i + 2), 0).r);\n}\n"
+            "int loop_vertex(int i) { return int(texelFetch(model_loops, texel_at(i), 0).r); }\n"
+            # Blender 4.x/5.x's vertex normal (core/visibility/vertex_normals.hpp):
+            # over the vertex's faces, Newell's face normal times the corner's angle.
+            "vec3 vertex_normal(int vertex, vec3 own)\n{\n"
+            "  int begin = int(texelFetch(model_layout, texel_at(vertex), 0).w);\n"
+            "  int end = int(texelFetch(model_layout, texel_at(vertex + 1), 0).w);\n"
+            "  vec3 sum = vec3(0.0);\n"
+            "  for (int k = begin; k < end; k++) {\n"
+            "    vec4 corner = texelFetch(model_corners, texel_at(k), 0);\n"
+            "    int first = int(corner.x), size = int(corner.y), at = int(corner.z);\n"
+            "    vec3 face = vec3(0.0), previous = geometry_at(3 * loop_vertex(first + size - 1));\n"
+            "    for (int i = 0; i < size; i++) {\n"
+            "      vec3 current = geometry_at(3 * loop_vertex(first + i));\n"
+            "      face += vec3((previous.y - current.y) * (previous.z + current.z),\n"
+            "                   (previous.z - current.z) * (previous.x + current.x),\n"
+            "                   (previous.x - current.x) * (previous.y + current.y));\n"
+            "      previous = current;\n"
+            "    }\n"
+            "    float face_length = length(face);\n"
+            "    face = face_length > 0.0 ? face * (1.0 / face_length) : vec3(0.0, 0.0, 1.0);\n"
+            "    vec3 to_previous = geometry_at(3 * loop_vertex(first + (at + size - 1) % size)) - own;\n"
+            "    vec3 to_next = geometry_at(3 * loop_vertex(first + (at + 1) % size)) - own;\n"
+            "    float cosine = dot(normalize(to_previous), normalize(to_next));\n"
+            "    sum += face * acos(clamp(cosine, -1.0, 1.0));\n"
+            "  }\n"
+            "  float sum_length = length(sum);\n"
+            "  if (begin == end) { return normalize(own); }  // no face: the position's direction, as Blender\n"
+            "  return sum_length > 0.0 ? sum / sum_length : vec3(0.0);\n}\n"
             # Duff et al. 2017 (mesh_frames.cpp basis_from_normal): t from n alone.
             "vec3 tangent_from_normal(vec3 n)\n{\n"
             "  float sign_z = n.z >= 0.0 ? 1.0 : -1.0;\n"
@@ -164,7 +217,7 @@ def main_prologue(order, lobes):
         "  int vertex = p_vertex;",
         "  vec4 vertex_layout = texelFetch(model_layout, texel_at(vertex), 0);",
         "  vec3 own = geometry_at(3 * vertex);",
-        "  vec3 normal_object = geometry_at(int(pose.offset.w) + 3 * vertex);",
+        "  vec3 normal_object = vertex_normal(vertex, own);",
         "  int neighbour = int(vertex_layout.z);",
         "  vec3 other = geometry_at(3 * neighbour);",
         "  mat3 object_to_world = mat3(pose.world_linear[0].xyz, pose.world_linear[1].xyz, pose.world_linear[2].xyz);",

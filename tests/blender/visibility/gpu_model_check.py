@@ -44,7 +44,8 @@ from penumbra.visibility import gpu_model, gpu_preview  # noqa: E402
 
 def sheet(vertices):
     """A wavy grid of quads: object-space positions, normals (Blender's rule,
-    from the core), triangles and the reference neighbours."""
+    from the core: the CPU side's), triangles, the reference neighbours and
+    the polygons (sizes, vertex loops)."""
     core = native.require()
     side = max(2, int(math.sqrt(vertices)))
     u, v = np.meshgrid(np.linspace(-1.0, 1.0, side), np.linspace(-1.0, 1.0, side), indexing="ij")
@@ -57,7 +58,7 @@ def sheet(vertices):
     normals = mesh.vertex_normals(positions)
     neighbours = core.visibility.reference_neighbours(len(positions), sizes, loops)
     triangles = np.concatenate([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]).astype(np.int64)
-    return positions, normals, triangles, np.asarray(neighbours, dtype=np.int64)
+    return positions, normals, triangles, np.asarray(neighbours, dtype=np.int64), (sizes, loops)
 
 
 def random_rotation(rng, angle):
@@ -103,7 +104,7 @@ def world_matrix():
 
 
 def compare(order, lobes, brdf, mesh, rng, lighting=None):
-    positions, normals, triangles, neighbours = mesh
+    positions, normals, triangles, neighbours, polygons = mesh
     model = synthetic_model(rng, order, lobes, len(positions))
     rotations = np.stack([random_rotation(rng, rng.uniform(0.2, 1.2)) for _ in range(JOINTS)]).astype(np.float32)
     if lighting is None:  # a uniform World of radiance 1
@@ -119,8 +120,8 @@ def compare(order, lobes, brdf, mesh, rng, lighting=None):
     rest = np.stack([np.eye(3, dtype=np.float32)] * JOINTS)
     rgb_rest, _, _ = model.shade(rest, world_positions, world_normals, triangles, neighbours, lighting,
                                  model=brdf, phong_exponent=24.0, camera=camera, transmission=(0.4, 0.5, 0.6))
-    on_gpu = gpu_model.ModelOnGpu(model, neighbours)
-    on_gpu.set_frame(gpu_model.frame_inputs(model, model.pose_features(rotations), positions, normals, world, lighting,
+    on_gpu = gpu_model.ModelOnGpu(model, neighbours, polygons)
+    on_gpu.set_frame(gpu_model.frame_inputs(model, model.pose_features(rotations), positions, world, lighting,
                                             brdf, 24.0, camera, (0.4, 0.5, 0.6)))
     rgb_gpu, ao_gpu = on_gpu.shade_offscreen()
     return {"order": order, "lobes": lobes, "brdf": brdf,

@@ -85,8 +85,7 @@ def scene_pose(name):
         model = frame_shading.loaded_model(obj).model
         features = model.pose_features(armature_data.bone_rotations(armature_data.armature_of(obj), model.joints))
         world = [list(row) for row in obj.matrix_world]
-        return model_shader.pose_data(features, model_shader.feature_vec4_count(len(features)), world,
-                                      model.vertex_count)
+        return model_shader.pose_data(features, model_shader.feature_vec4_count(len(features)), world)
     return on_main(compute)
 
 
@@ -166,7 +165,7 @@ def _textures():
 def test_deleting_the_object_frees_its_textures(baseline, tmp_path):
     name = make_character(tmp_path)
     redraw()
-    assert _textures() == baseline + 5  # four of the model, one of the frame
+    assert _textures() == baseline + 7  # six of the model, one of the frame
     on_main(lambda: bpy.data.objects.remove(bpy.data.objects[name]))
     wait_until(lambda: name not in _gpu()[1]._previews)
     assert _textures() == baseline
@@ -188,13 +187,13 @@ def test_a_model_change_frees_the_old_models_textures(baseline, tmp_path):
     on_main(other_model)
     redraw()
     assert on_main(lambda: id(_gpu()[1]._previews[name].batch)) != old
-    assert _textures() == baseline + 5  # the new model's only
+    assert _textures() == baseline + 7  # the new model's only
 
 
 def test_a_new_file_frees_every_texture(baseline, tmp_path):
     make_character(tmp_path)
     redraw()
-    assert _textures() == baseline + 5
+    assert _textures() == baseline + 7
     on_main(lambda: bpy.ops.wm.read_homefile())
     assert on_main(lambda: len(_gpu()[1]._previews)) == 0
     assert _textures() == baseline
@@ -211,7 +210,7 @@ def test_undoing_the_switch_to_shade_from_model_frees_its_textures(baseline, tmp
         bpy.context.scene.frame_set(4)
     on_main(disable_and_push)
     redraw()
-    assert _textures() == baseline + 5
+    assert _textures() == baseline + 7
 
     def undo():
         override = _view3d()
@@ -230,7 +229,7 @@ def test_undoing_the_switch_to_shade_from_model_frees_its_textures(baseline, tmp
 def test_a_topology_edit_stops_the_preview_and_says_why(baseline, tmp_path):
     name = make_character(tmp_path)
     redraw()
-    assert _textures() == baseline + 5
+    assert _textures() == baseline + 7
 
     def edit():
         bpy.data.objects[name].data.vertices.add(1)
