@@ -240,3 +240,41 @@ def test_a_topology_edit_stops_the_preview_and_says_why(baseline, tmp_path):
     assert name in status and "vertices" in status, status
     assert on_main(lambda: name in _gpu()[1]._previews) is False
     assert _textures() == baseline
+
+
+def test_what_the_viewport_shades_matches_the_attributes_with_shape_keys_and_another_deform(baseline, tmp_path):
+    """The preview reads the evaluated mesh, so a shape key and a deform
+    modifier after the armature shade as the CPU's attributes do."""
+    name = make_character(tmp_path, brdf="PHONG")
+
+    def deform():
+        obj = bpy.data.objects[name]
+        obj.shape_key_add(name="Basis")
+        key = obj.shape_key_add(name="Bulge")
+        for k, point in enumerate(key.data):
+            point.co.x += 0.03 * ((k % 7) - 3)
+        key.value = 0.8
+        twist = obj.modifiers.new("Twist", "SIMPLE_DEFORM")
+        twist.deform_method = "TWIST"
+        twist.angle = 0.4
+        bpy.context.scene.frame_set(7)
+    on_main(deform)
+    redraw()
+
+    def compare():
+        import numpy as np
+        from penumbra.visibility import frame_shading
+        scene = bpy.context.scene
+        gpu_rgb, gpu_ao = _gpu()[1]._previews[name].batch.shade_offscreen()
+        obj = bpy.data.objects[name]
+        cpu_rgb, cpu_ao, _ = frame_shading.shade_object(obj, scene)
+        cpu_rgb, cpu_ao = cpu_rgb.copy(), cpu_ao.copy()  # views of buffers the next shade reuses
+        obj.modifiers["Twist"].show_viewport = False  # what the shading would be without the extra deform
+        untwisted, _, _ = frame_shading.shade_object(obj, scene, bpy.context.evaluated_depsgraph_get())
+        return (float(np.max(np.abs(np.maximum(gpu_rgb, 0.0) - cpu_rgb))),
+                float(np.max(np.abs(np.clip(gpu_ao, 0.0, 1.0) - cpu_ao))), float(np.ptp(cpu_rgb)),
+                float(np.max(np.abs(untwisted - cpu_rgb))))
+    rgb_difference, ao_difference, spread, twist_effect = on_main(compare)
+    assert rgb_difference <= 1e-3 and ao_difference <= 1e-3, (rgb_difference, ao_difference)
+    assert spread > 0.1  # a shading that varies over the character was compared
+    assert twist_effect > 1e-2  # and the extra deform changed it
