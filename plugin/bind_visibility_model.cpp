@@ -222,6 +222,61 @@ void bind_properties(py::class_<vis::PoseModel, Model>& c) {
         });
 }
 
+// What the GPU preview uploads once per model (addon/penumbra/visibility/
+// gpu_model.py): the stored arrays as they are, binary16 bits included, so the
+// shader applies exactly the weights the CPU applies.
+void bind_stored_blocks(py::class_<vis::PoseModel, Model>& c) {
+    c.def("stored_blocks", [](const vis::PoseModel& x) {
+        py::dict d;
+        d["feature_offsets"] = to_array(x.feature_offsets, {py::ssize_t(x.feature_offsets.size())});
+        d["joint_offsets"] = to_array(x.joint_offsets, {py::ssize_t(x.joint_offsets.size())});
+        d["joint_index"] = to_array(x.joint_index, {py::ssize_t(x.joint_index.size())});
+        d["block_directions"] = to_array(x.block_directions, {py::ssize_t(x.block_directions.size())});
+        d["weight_scales"] = to_array(x.weight_scales, {py::ssize_t(x.weight_scales.size())});
+        d["weight_offsets"] = to_array(x.weight_offsets, {py::ssize_t(x.weight_offsets.size())});
+        d["weights"] = to_array(x.weights, {py::ssize_t(x.weights.size())});
+        d["bias"] = to_array(x.bias, {py::ssize_t(x.vertex_count), py::ssize_t(x.params_per_vertex())});
+        return d;
+    }, "The stored per-vertex model (pose_model.hpp), for upload: feature_offsets (J + 1), joint_offsets (V + 1), "
+       "joint_index, block_directions, weight_scales (one per block), weight_offsets (V + 1), weights (binary16 "
+       "bits, uint16), bias (V, d).");
+    c.def("pose_features", [](const vis::PoseModel& x, const Floats& joint_rotations) {
+        const auto r = rotations(joint_rotations, x.joints.size(), "joint_rotations");
+        const std::vector<float> f = vis::pose_features(x, r.data());
+        return to_array(f, {py::ssize_t(f.size())});
+    }, py::arg("joint_rotations"),
+       "The pose vector of §4.3 step 1 (without its bias): each joint's features projected on its directions, "
+       "joint after joint (float32, feature_offsets[-1] of them).");
+    c.def_static("from_blocks", [](int order, int lobes, const std::vector<std::string>& joints,
+                                   const Indices& feature_offsets, const Floats& feature_basis,
+                                   const Indices& joint_offsets, const Indices& joint_index,
+                                   const Indices& block_directions, const Floats& bias, const Floats& weights,
+                                   std::uint64_t topology_hash) {
+        auto model = std::make_shared<vis::PoseModel>();
+        model->order = order;
+        model->lobes = lobes;
+        model->joints = joints;
+        model->armature_bones = joints;
+        model->topology_hash = topology_hash;
+        const auto jo = indices(joint_offsets, "joint_offsets", false);
+        if (jo.empty()) throw py::value_error("joint_offsets needs vertex_count + 1 entries");
+        model->vertex_count = jo.size() - 1;
+        model->joint_offsets = jo;
+        model->feature_offsets = indices(feature_offsets, "feature_offsets", false);
+        model->feature_basis.assign(feature_basis.data(), feature_basis.data() + feature_basis.size());
+        for (auto j : indices(joint_index, "joint_index", false)) model->joint_index.push_back(std::uint16_t(j));
+        for (auto c : indices(block_directions, "block_directions", false)) model->block_directions.push_back(std::uint8_t(c));
+        model->bias.assign(bias.data(), bias.data() + bias.size());
+        set_weights(*model, std::vector<float>(weights.data(), weights.data() + weights.size()));
+        vis::check_pose_model(*model);
+        return model;
+    }, py::arg("order"), py::arg("lobes"), py::arg("joints"), py::arg("feature_offsets"), py::arg("feature_basis"),
+       py::arg("joint_offsets"), py::arg("joint_index"), py::arg("block_directions"), py::arg("bias"),
+       py::arg("weights"), py::arg("topology_hash") = 0,
+       "A model from given weights (float, stored as binary16 blocks) in the stored layout, RotationMatrix "
+       "features: synthetic models for tests and benchmarks. Raises ArgumentError when inconsistent.");
+}
+
 void bind_pose_model(py::module_& m) {
     const vis::BakeSettings bake;            // every default below is the core's own
     const sh::ShadingParameters shading;
@@ -236,6 +291,7 @@ void bind_pose_model(py::module_& m) {
             vis::write_pose_model(path, model);
         }, py::arg("path"), "Writes the model atomically.");
     bind_properties(c);
+    bind_stored_blocks(c);
     c.def("synthesize", &synthesize, py::arg("joint_rotations"), py::arg("threads") = bake.threads,
           "Paper §4.3 step 1: lobes for a pose. joint_rotations (J, 3, 3) in `joints` order. Returns "
           "(axes (V, c, 3) local, bands (V, c, order), params (V, c, 2 + order)).");

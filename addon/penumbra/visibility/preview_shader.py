@@ -33,6 +33,7 @@ import math
 import numpy as np
 
 from .. import native
+from . import model_shader
 
 # The largest model a bake makes, and so the largest the preview draws: the
 # core's limits (core/visibility/order_limit.hpp, zh_fit.hpp). None without
@@ -291,11 +292,16 @@ _VIEWPORT_GLSL = [
 ]
 
 
-def vertex_source(order, lobes, model, readback):
-    """The GLSL of the vertex shader's functions and main() for one configuration."""
+def vertex_source(order, lobes, model, readback, model_texture_width=None):
+    """The GLSL of the vertex shader's functions and main() for one
+    configuration. model_texture_width None: the lobes and the frame come as
+    vertex attributes; else the shader evaluates the pose model from its
+    textures at that width (model_shader.py)."""
     check_configuration(order, lobes, model)
     x = quarter_turn(order)
+    from_model = model_texture_width is not None
     lines = [
+        *([model_shader.helper_source(model_texture_width)] if from_model else []),
         _eval_function(order), _normal_zonal_function(order), _rotate_z_function(order),
         _sparse_product_function("quarter_turn", x), _sparse_product_function("quarter_turn_t", x.T),
         _operator_function(order),
@@ -303,12 +309,13 @@ def vertex_source(order, lobes, model, readback):
         "void main()",
         "{",
         "  bool valid = true;",
+        *(model_shader.main_prologue(order, lobes) if from_model else []),
         *_FRAME_GLSL,
         *(_PHONG_AXIS_GLSL if model == "phong" else []),
         *_ROTATION_GLSL,
     ]
     for lobe in range(lobes):
-        lines += _lobe_glsl(order, lobes, model, lobe)
+        lines += _lobe_glsl(order, lobes, model, lobe, from_model)
     lines += _TO_WORLD_GLSL
     if model == "translucent":
         lines += ["  sh_eval(n, y);",
@@ -323,7 +330,7 @@ def vertex_source(order, lobes, model, readback):
     return "\n".join(lines)
 
 
-def _lobe_glsl(order, lobes, model, lobe):
+def _lobe_glsl(order, lobes, model, lobe, from_model=False):
     """main()'s lines for one ZH lobe: unpack, check, and add its SH (and, for
     Phong, its zonal part about the normal)."""
     zh_scale = [math.sqrt(4.0 * math.pi / (2 * l + 1)) for l in range(order)]
@@ -333,9 +340,12 @@ def _lobe_glsl(order, lobes, model, lobe):
         return f"{packed[k // 4]}.{'xyzw'[k % 4]}"
 
     base = lobe * (3 + order)
-    lines = [f"  // lobe {lobe}: axis (local t, b, n) and band coefficients",
-             f"  a = vec3({packed_value(base)}, {packed_value(base + 1)}, {packed_value(base + 2)});"]
-    lines += [f"  g[{l}] = {packed_value(base + 3 + l)};" for l in range(order)]
+    if from_model:
+        lines = model_shader.lobe_from_parameters(order, lobe)
+    else:
+        lines = [f"  // lobe {lobe}: axis (local t, b, n) and band coefficients",
+                 f"  a = vec3({packed_value(base)}, {packed_value(base + 1)}, {packed_value(base + 2)});"]
+        lines += [f"  g[{l}] = {packed_value(base + 3 + l)};" for l in range(order)]
     lines += _LOBE_CHECK_GLSL
     for l in range(order):
         lines.append(f"  for (int i = {l * l}; i < {(l + 1) * (l + 1)}; i++) "

@@ -21,13 +21,11 @@ window) the viewport's own redraw with the preview on and off.
 Prints one line `RESULT {json}`.
 """
 
-import json
 import math
 import os
 import statistics
 import sys
 import time
-import traceback
 
 import bpy
 import numpy as np
@@ -52,7 +50,10 @@ if "--gpu-init" in ARGS:
     import gpu
     gpu.init()
 
+sys.path.append(ROOT)  # bench.helpers
 import penumbra  # noqa: E402
+from bench.helpers.blender_result import report  # noqa: E402
+from bench.helpers.gpu_preview_scene import gpu_draw_seconds  # noqa: E402
 from penumbra.visibility import frame_shading, gpu_preview  # noqa: E402
 import visibility_character  # noqa: E402
 
@@ -235,50 +236,6 @@ def _view3d():
     return None, None
 
 
-def _look_at_character(width, height):
-    """A view-projection matrix framing the character (as the viewport would)."""
-    from mathutils import Matrix, Vector
-    eye, target = Vector((2.0, -5.0, 2.0)), Vector((0.0, 0.0, 1.3))
-    forward = (target - eye).normalized()
-    right = forward.cross(Vector((0.0, 0.0, 1.0))).normalized()
-    up = right.cross(forward)
-    view = Matrix((tuple(right) + (-right.dot(eye),), tuple(up) + (-up.dot(eye),),
-                   tuple(-forward) + (forward.dot(eye),), (0.0, 0.0, 0.0, 1.0)))
-    f, near, far, aspect = 1.0 / math.tan(math.radians(20.0)), 0.1, 100.0, width / height
-    projection = Matrix(((f / aspect, 0, 0, 0), (0, f, 0, 0),
-                         (0, 0, (far + near) / (near - far), 2 * far * near / (near - far)), (0, 0, -1, 0)))
-    return projection @ view
-
-
-def gpu_draw_seconds(batch, width=1280, height=720, repeats=5):
-    """The preview's triangles drawn into a viewport-sized buffer with depth, synchronized by a readback."""
-    import gpu
-    offscreen = gpu.types.GPUOffScreen(width, height)
-    view_projection = _look_at_character(width, height)
-    pixel = gpu.types.Buffer("FLOAT", 4)
-    samples, covered = [], 0
-    try:
-        with offscreen.bind():
-            framebuffer = gpu.state.active_framebuffer_get()
-            for k in range(repeats + 1):
-                t = time.perf_counter()
-                framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
-                gpu.state.depth_test_set("LESS_EQUAL")
-                gpu.state.depth_mask_set(True)
-                batch.draw(view_projection)
-                framebuffer.read_color(width // 2, height // 2, 1, 1, 4, 0, "FLOAT", data=pixel)
-                if k:
-                    samples.append(time.perf_counter() - t)
-            image = gpu.types.Buffer("FLOAT", width * height * 4)
-            framebuffer.read_color(0, 0, width, height, 4, 0, "FLOAT", data=image)
-            covered = int(np.count_nonzero(np.asarray(image).reshape(-1, 4)[:, 3] > 0.0))
-            gpu.state.depth_mask_set(False)
-            gpu.state.depth_test_set("NONE")
-    finally:
-        offscreen.free()
-    return statistics.median(samples), covered
-
-
 def timing(scene, obj, repeats=3):
     """Milliseconds per pose, medians: the CPU part (synthesis, frames, packing),
     the upload, the GPU shading of every vertex (points) with its readback, the
@@ -297,7 +254,7 @@ def timing(scene, obj, repeats=3):
         t2 = time.perf_counter()
         gpu_preview.shade_offscreen(inputs)
         t3 = time.perf_counter()
-        seconds, covered = gpu_draw_seconds(batch)
+        seconds, covered = gpu_draw_seconds(batch.draw)
         cpu.append(t1 - t0)
         upload.append(t2 - t1)
         shade.append(t3 - t2)
@@ -353,32 +310,22 @@ def timing(scene, obj, repeats=3):
     return out
 
 
-def main():
-    result = {"blender": bpy.app.version_string, "background": bool(bpy.app.background)}
-    try:
-        import gpu
-        penumbra.register()
-        result["unavailable"] = gpu_preview.gpu_unavailable_reason()
-        result["renderer"] = f"{gpu.platform.renderer_get()} / {gpu.platform.version_get()}"
-        scene, obj, bake_seconds = baked_character(VERTICES)
-        result["bake_seconds"] = round(bake_seconds, 2)
-        result["pipeline"] = pipeline_comparison(scene, obj)
-        result["random"] = random_comparison(RANDOM_VERTICES, SWEEP)
-        result["timing"] = [timing(scene, obj)]
-        if TIMING_VERTICES:
-            frame_shading.forget()
-            scene, obj, bake_seconds = baked_character(TIMING_VERTICES, frames=8, rays=16)
-            result["timing"].append(timing(scene, obj))
-            result["timing"][-1]["bake_seconds"] = round(bake_seconds, 2)
-        penumbra.unregister()
-        result["ok"] = True
-    except Exception:
-        result["ok"] = False
-        result["error"] = traceback.format_exc()
-    print("RESULT " + json.dumps(result), flush=True)
+def check(result):
+    import gpu
+    penumbra.register()
+    result["unavailable"] = gpu_preview.gpu_unavailable_reason()
+    result["renderer"] = f"{gpu.platform.renderer_get()} / {gpu.platform.version_get()}"
+    scene, obj, bake_seconds = baked_character(VERTICES)
+    result["bake_seconds"] = round(bake_seconds, 2)
+    result["pipeline"] = pipeline_comparison(scene, obj)
+    result["random"] = random_comparison(RANDOM_VERTICES, SWEEP)
+    result["timing"] = [timing(scene, obj)]
+    if TIMING_VERTICES:
+        frame_shading.forget()
+        scene, obj, bake_seconds = baked_character(TIMING_VERTICES, frames=8, rays=16)
+        result["timing"].append(timing(scene, obj))
+        result["timing"][-1]["bake_seconds"] = round(bake_seconds, 2)
+    penumbra.unregister()
 
 
-main()
-if not bpy.app.background:
-    # A window's Blender would stay open after the script: quit it as a user would.
-    bpy.ops.wm.quit_blender()
+report(check)

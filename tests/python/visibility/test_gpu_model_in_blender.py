@@ -1,0 +1,65 @@
+"""The pose model evaluated in the GPU preview's vertex shader
+(addon/penumbra/visibility/gpu_model.py) against the CPU run time, per
+vertex, read back from an RGBA32F offscreen buffer (issue 27 item 2):
+tests/blender/visibility/gpu_model_check.py on synthetic models in the
+stored layout, every BRDF × SH order 1–8 × 1–4 lobes under a uniform World of
+radiance 1, and a few under random lighting; in Debian's Blender 3.4 in a
+window under Xvfb and in the bpy 5.2 module after gpu.init()."""
+
+import json
+import os
+import shutil
+import subprocess
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+CHECK = os.path.join(ROOT, "tests", "blender", "visibility", "gpu_model_check.py")
+GPU_TOLERANCE = 1e-3  # the goal, absolute per vertex (measured ~1e-5: float rounding)
+
+
+def run_check(command, capsys, what):
+    env = dict(os.environ)
+    env.pop("PYTHONPATH", None)
+    proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True, timeout=900)
+    lines = [line for line in proc.stdout.splitlines() if line.startswith("RESULT ")]
+    assert len(lines) == 1, f"exit {proc.returncode}\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}"
+    result = json.loads(lines[0][len("RESULT "):])
+    assert result["ok"], result.get("error")
+    cases = result["cases"]
+    with capsys.disabled():
+        print(f"\n{what}: {result['renderer']}: {len(cases)} configurations on {result['vertices']} vertices in "
+              f"{result['seconds']} s: max |GPU - CPU| rgb {max(c['max_abs_rgb'] for c in cases):.2e}, "
+              f"visibility {max(c['max_abs_visibility'] for c in cases):.2e}")
+    return result
+
+
+def check_result(result):
+    assert result["unavailable"] is None
+    assert result["vertices"] <= 2000
+    cases = result["cases"]
+    configurations = {(c["brdf"], c["order"], c["lobes"]) for c in cases}
+    assert configurations >= {(b, o, l) for b in ("diffuse", "phong", "translucent")
+                              for o in range(1, 9) for l in range(1, 5)}
+    for case in cases:
+        assert case["max_abs_rgb"] <= GPU_TOLERANCE, case
+        assert case["max_abs_visibility"] <= GPU_TOLERANCE, case
+        # Non-trivial models: the pose moved the shading, and some vertices had no joint block.
+        assert case["pose_effect"] > 10 * GPU_TOLERANCE, case
+        assert case["constant_vertices"] > 0, case
+    assert sum(1 for c in cases if c.get("lighting") == "random") == 3
+
+
+def test_gpu_model_matches_the_cpu_in_blender_3_4_under_xvfb(capsys):
+    blender, xvfb = shutil.which("blender"), shutil.which("xvfb-run")
+    assert blender and xvfb, "Debian's blender and xvfb-run are installed by scripts/install_deps.sh"
+    result = run_check([xvfb, "-a", blender, "--factory-startup", "--python", CHECK, "--", "--vertices", "1600"],
+                       capsys, "Blender 3.4, window under Xvfb")
+    assert result["blender"].startswith("3.4") and not result["background"]
+    check_result(result)
+
+
+def test_gpu_model_matches_the_cpu_in_the_bpy_5_2_module_with_gpu_init(capsys):
+    python = os.path.join(ROOT, ".venv313", "bin", "python")
+    assert os.path.exists(python), "the bpy 5.2 module is installed by scripts/install_deps.sh"
+    result = run_check([python, CHECK, "--gpu-init", "--vertices", "1600"], capsys, "bpy 5.2 module, gpu.init() (EGL)")
+    assert result["blender"].startswith("5.2") and result["background"]
+    check_result(result)
