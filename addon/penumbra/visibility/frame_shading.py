@@ -178,9 +178,11 @@ def shade_object(obj, scene, depsgraph=None, check_topology=False):
     t0 = time.perf_counter()
     entry = loaded_model(obj, check_topology)
     model = entry.model
-    armature = armature_data.armature_of(obj)
-    rotations = armature_data.bone_rotations(armature, model.joints)
     depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
+    # The pose as `depsgraph` evaluated it: a render's depsgraph does not copy
+    # its pose back to the scene's armature, which may stand at another frame.
+    armature = armature_data.armature_of(obj).evaluated_get(depsgraph)
+    rotations = armature_data.bone_rotations(armature, model.joints)
     t_read = time.perf_counter()
     world = _read_positions(obj, depsgraph, entry)
     read_mesh = time.perf_counter() - t_read
@@ -257,9 +259,29 @@ def _drives_enabled_object(scene, update_ids):
     return False
 
 
+# True from a frame's render_pre to its render_post (or a cancel). Blender
+# sets each rendered frame (a still too) between the two and calls
+# frame_change_post with the render's depsgraph: shading there gives every
+# rendered frame its own attributes, even with live_update off, where the
+# viewport's attributes may be stale by design.
+_rendering = False
+
+
+@persistent
+def on_render_pre(scene, *args):
+    global _rendering
+    _rendering = True
+
+
+@persistent
+def on_render_end(scene, *args):
+    global _rendering
+    _rendering = False
+
+
 @persistent
 def on_frame_change(scene, depsgraph=None):
-    if not scene.penumbra.visibility.live_update:
+    if not (scene.penumbra.visibility.live_update or _rendering):
         return
     shade_enabled_objects(scene, depsgraph)
 
@@ -285,16 +307,22 @@ def request_refresh():
 
 
 
+def _handlers():
+    h = bpy.app.handlers
+    return ((h.frame_change_post, on_frame_change), (h.depsgraph_update_post, on_depsgraph_update),
+            (h.render_pre, on_render_pre), (h.render_post, on_render_end), (h.render_cancel, on_render_end))
+
+
 def register_handlers():
-    if on_frame_change not in bpy.app.handlers.frame_change_post:
-        bpy.app.handlers.frame_change_post.append(on_frame_change)
-    if on_depsgraph_update not in bpy.app.handlers.depsgraph_update_post:
-        bpy.app.handlers.depsgraph_update_post.append(on_depsgraph_update)
+    for handlers, fn in _handlers():
+        if fn not in handlers:
+            handlers.append(fn)
 
 
 def unregister_handlers():
-    for handlers, fn in ((bpy.app.handlers.frame_change_post, on_frame_change),
-                         (bpy.app.handlers.depsgraph_update_post, on_depsgraph_update)):
+    global _rendering
+    for handlers, fn in _handlers():
         while fn in handlers:
             handlers.remove(fn)
+    _rendering = False
     forget()

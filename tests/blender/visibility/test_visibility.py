@@ -338,6 +338,65 @@ def test_setup_material_shows_the_shading_in_a_cycles_render(addon, tmp_path):
     assert pixels[2, 2, :3].max() < 0.02   # the background
 
 
+def _emission_render(scene, tmp_path, name, **kwargs):
+    """A 32x32 Cycles render of the set-up material's emission (1 sample,
+    fixed seed: the same attributes give the same pixels)."""
+    scene.render.filepath = os.path.join(str(tmp_path), name)
+    bpy.ops.render.render(write_still=not kwargs, **kwargs)
+    path = scene.render.frame_path(frame=scene.frame_start) if kwargs else scene.render.filepath
+    image = bpy.data.images.load(path)
+    pixels = np.array(image.pixels[:]).reshape(32, 32, 4)[:, :, :3].copy()
+    bpy.data.images.remove(image)
+    return pixels
+
+
+def test_with_live_update_off_a_render_still_gets_each_frames_attributes(addon, tmp_path):
+    """Issue 27 item 4: live_update off leaves the viewport's attributes as
+    they are, but F12 and animation renders shade the frame they render,
+    with the pose the render evaluated."""
+    obj, rig = character(addon)
+    uniform_world(addon, (1.0, 1.0, 1.0), 1.0)
+    assert bake_op(tmp_path) == {"FINISHED"}
+    assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
+    assert bpy.ops.penumbra.setup_material() == {"FINISHED"}
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    addon.collection.objects.link(camera)
+    addon.camera = camera
+    camera.location = (0.0, -7.0, 1.4)
+    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
+    addon.render.engine = "CYCLES"  # the World stays: the shading is lit by it
+    addon.cycles.samples = 1
+    addon.cycles.use_denoising = False
+    addon.render.resolution_x, addon.render.resolution_y = 32, 32
+    obj.penumbra_visibility.enabled = True
+    settings = addon.penumbra.visibility
+    settings.live_update = True
+    posed, other = 13, 1
+    addon.frame_set(posed)
+    expected = _emission_render(addon, tmp_path, "live.png")
+    addon.frame_set(other)
+    stale = _emission_render(addon, tmp_path, "other.png")
+    other_attributes = attribute(obj, "penumbra_shading", 4).copy()
+    # The two poses render apart, so a stale attribute would show.
+    assert np.abs(expected - stale).max() > 0.05
+    settings.live_update = False
+    addon.frame_set(posed)
+    assert np.array_equal(attribute(obj, "penumbra_shading", 4), other_attributes)  # the viewport's stay as they were
+    still = _emission_render(addon, tmp_path, "still.png")
+    assert np.abs(still - expected).max() < 1e-4
+    addon.frame_set(other)
+    addon.frame_start = addon.frame_end = posed
+    animated = _emission_render(addon, tmp_path, "anim_", animation=True)
+    assert np.abs(animated - expected).max() < 1e-4
+    # live_update on too: a render's depsgraph poses the armature at the
+    # rendered frame without copying that pose back to the scene's armature,
+    # which still stands at `other` (this rendered 19 pixels wrong).
+    settings.live_update = True
+    addon.frame_set(other)
+    animated_live = _emission_render(addon, tmp_path, "anim_live_", animation=True)
+    assert np.abs(animated_live - expected).max() < 1e-4
+
+
 def test_model_path_and_report_are_saved_with_the_blend(addon, tmp_path):
     obj, rig = character(addon)
     name = obj.name
