@@ -65,7 +65,7 @@ py::dict rig_dict(const LightRig& rig) {
     const auto f = py::ssize_t(rig.frames.size()), s = py::ssize_t(rig.slots);
     py::array_t<double> dir({f, s, py::ssize_t(3)}), rgb({f, s, py::ssize_t(3)});
     py::array_t<double> power({f, s}), spread({f, s}), total({f, py::ssize_t(3)}), err(f);
-    py::array_t<int> active(f);
+    py::array_t<int> active(f), counts(f);
     py::list defects;
     for (py::ssize_t t = 0; t < f; ++t) {
         const RigFrame& fr = rig.frames[t];
@@ -81,6 +81,7 @@ py::dict rig_dict(const LightRig& rig) {
         for (int c = 0; c < 3; ++c) total.mutable_at(t, c) = fr.total_rgb[c];
         active.mutable_at(t) = fr.active;
         err.mutable_at(t) = fr.adaptive_error;
+        counts.mutable_at(t) = fr.adaptive_count;
         defects.append(defects_dict(fr.defects));
     }
     py::dict out;
@@ -91,6 +92,8 @@ py::dict rig_dict(const LightRig& rig) {
     out["total_rgb"] = total;
     out["active"] = active;
     out["adaptive_error"] = err;
+    out["adaptive_counts"] = counts;
+    out["adaptive_count"] = rig.adaptive_count;
     out["defects"] = defects;
     out["slots"] = rig.slots;
     out["full_sphere"] = rig.full_sphere;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <numbers>
@@ -16,6 +17,7 @@
 #include "lights/region_assignment.hpp"
 #include "lights/region_kernels.hpp"
 #include "lights/irradiance_fit.hpp"
+#include "lights/sun_irradiance.hpp"
 #include "common/parallel.hpp"
 #include "sh/point_sets.hpp"
 
@@ -367,32 +369,58 @@ double relative_rmse(const Eigen::MatrixXd& estimate, const Eigen::MatrixXd& ref
     return std::sqrt(num / den);
 }
 
+namespace {
+
+// The map's irradiance on Fibonacci normals over a copy reduced to at most
+// 256 columns: the search measures many counts, and irradiance is smooth.
+struct ReducedReference {
+    std::vector<Eigen::Vector3d> normals;
+    Eigen::MatrixXd irradiance;
+};
+
+ReducedReference irradiance_reference(const EnvironmentMap& map, int normal_count, int threads) {
+    if (normal_count < 1) throw ArgumentError("normal_count must be at least 1");
+    MapOptions reduce;
+    reduce.projection = map.full_sphere ? Projection::equirectangular : Projection::hemisphere_polar;
+    reduce.max_width = 256;
+    reduce.threads = threads;
+    Image copy(map.width, map.height, 3);
+    copy.pixels = map.rgb;
+    const EnvironmentMap small = make_environment(copy, reduce);
+    ReducedReference r;
+    r.normals = sh::fibonacci_sphere(normal_count).directions;
+    r.irradiance = exact_irradiance(small, r.normals, threads);
+    return r;
+}
+
+}  // namespace
+
+int max_lights(SunModel model) {
+    return model == SunModel::eevee_legacy ? eevee_legacy_max_lights : std::numeric_limits<int>::max();
+}
+
+double rig_error(const EnvironmentMap& map, const std::vector<Light>& lights, SunModel model,
+                 const std::array<double, 3>& luminance, int normal_count, int threads) {
+    const ReducedReference r = irradiance_reference(map, normal_count, threads);
+    return relative_rmse(sun_irradiance(lights, r.normals, model, threads), r.irradiance, luminance);
+}
+
 AdaptiveResult adaptive_count(const EnvironmentMap& map, const LightOptions& options, double tolerance,
                               int max_count, int normal_count) {
     if (!(tolerance > 0.0)) throw ArgumentError("the irradiance tolerance must be positive");
     if (max_count < 1) throw ArgumentError("the light budget must be at least 1");
-    if (normal_count < 1) throw ArgumentError("normal_count must be at least 1");
+    max_count = std::min(max_count, max_lights(options.sun_model));
     max_count = int(std::min<std::size_t>(std::size_t(max_count), std::size_t(map.width) * map.height));
 
-    // Reference on a reduced copy; normals over the map's domain.
-    MapOptions reduce;
-    reduce.projection = map.full_sphere ? Projection::equirectangular : Projection::hemisphere_polar;
-    reduce.max_width = 256;
-    reduce.threads = options.threads;
-    Image copy(map.width, map.height, 3);
-    copy.pixels = map.rgb;
-    const EnvironmentMap small = make_environment(copy, reduce);
-    std::vector<Eigen::Vector3d> normals = sh::fibonacci_sphere(normal_count).directions;
-    const Eigen::MatrixXd reference = exact_irradiance(small, normals, options.threads);
-
+    const ReducedReference r = irradiance_reference(map, normal_count, options.threads);
     const LuminanceDistribution dist = luminance_distribution(map, options.luminance, options.threads);
     const auto sampler = make_sampler(options.sampler, dist);
     auto error_of = [&](int count) {
         LightOptions o = options;
         o.count = count;
-        o.fit_irradiance = false;  // the search measures region lights; the caller fits the count it picks
-        return relative_rmse(irradiance(compute_lights(map, dist, *sampler, o).lights, normals), reference,
-                             options.luminance);
+        return relative_rmse(sun_irradiance(compute_lights(map, dist, *sampler, o).lights, r.normals,
+                                            options.sun_model, options.threads),
+                             r.irradiance, options.luminance);
     };
     int previous = 0;
     for (int count = 1;;) {

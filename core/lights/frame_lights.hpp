@@ -112,14 +112,28 @@ double relative_rmse(const Eigen::MatrixXd& estimate, const Eigen::MatrixXd& ref
 
 // Adaptive count: the fewest lights (searched over 1, 2, 3, 4, 6, 8, 12, ...
 // up to max_count, then bisected between the last failing and the first
-// passing count) whose irradiance relative RMSE over `normal_count` Fibonacci
-// normals is at most `tolerance`; max_count when none is. The error is
-// measured on a copy of the map reduced to at most 256 columns.
+// passing count) whose irradiance relative RMSE is at most `tolerance`;
+// max_count when none is. Each count is measured as it will be drawn: the
+// lights fitted as compute_lights fits them (options.fit_irradiance) and
+// their irradiance that of suns under options.sun_model (rig_error).
+// max_count is capped by max_lights(options.sun_model).
 struct AdaptiveResult {
     int count = 0;
     double error = 0.0;
 };
 AdaptiveResult adaptive_count(const EnvironmentMap& map, const LightOptions& options, double tolerance,
                               int max_count, int normal_count = 128);
+
+// The relative RMSE (luminance) of `lights`, drawn as suns under `model`,
+// against the map's irradiance over `normal_count` Fibonacci normals, the
+// reference taken on a copy of the map reduced to at most 256 columns.
+double rig_error(const EnvironmentMap& map, const std::vector<Light>& lights, SunModel model,
+                 const std::array<double, 3>& luminance = rec709_luminance, int normal_count = 128,
+                 int threads = 0);
+
+// The most lights a renderer draws: EEVEE Legacy (Blender 2.8–4.1) keeps at
+// most 128 (MAX_LIGHT in its eevee_private.h) and ignores the rest.
+constexpr int eevee_legacy_max_lights = 128;
+int max_lights(SunModel model);
 
 }  // namespace penumbra::lights

@@ -1,6 +1,7 @@
 #include "lights/rig.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -39,31 +40,77 @@ void RigBuilder::add_map(EnvironmentMap map) {
                             std::to_string(last_map_.width) + "x" + std::to_string(last_map_.height) +
                             "; every frame of a light-rig source must have the same size");
     const PixelDefects defects = map.defects;
+    defects_.push_back(defects);
+    if (options_.adaptive_tolerance > 0.0) {
+        if (starts_shot(map)) end_shot();
+        const AdaptiveResult a =
+            adaptive_count(map, options_.lights, options_.adaptive_tolerance, options_.lights.count);
+        shot_needs_.push_back(a.count);
+        last_map_ = map;
+        shot_maps_.push_back(std::move(map));
+        return;
+    }
     FrameLights lights;
-    double error = -1.0;
     bool cut = raw_.empty();
     if (following()) {
         if (!tracker_) tracker_.emplace(options_.lights, options_.track);
         lights = tracker_->next(map, cut);
-    } else if (options_.adaptive_tolerance > 0.0) {
-        const AdaptiveResult a = adaptive_count(map, options_.lights, options_.adaptive_tolerance, options_.lights.count);
-        LightOptions o = options_.lights;
-        o.count = a.count;
-        lights = compute_lights(map, o);
-        error = a.error;
     } else {
         lights = compute_lights(map, options_.lights);
     }
     raw_.push_back(std::move(lights));
     cuts_.push_back(cut);
-    defects_.push_back(defects);
-    errors_.push_back(error);
+    errors_.push_back(-1.0);
     last_map_ = std::move(map);
 }
 
+// A new shot starts where the map's change is no rotation (the tracker's own
+// test, tracking.hpp), so that a shot's count holds only over its frames.
+bool RigBuilder::starts_shot(const EnvironmentMap& map) {
+    MapSignature signature = map_signature(map, options_.lights.luminance, options_.lights.threads);
+    bool cut = true;
+    if (!shot_maps_.empty()) {
+        const MapMotion m = estimate_rotation(signature_, signature, motion_);
+        cut = m.residual > options_.track.cut_residual;
+        motion_ = cut ? Eigen::Matrix3d::Identity() : m.rotation;
+    }
+    signature_ = std::move(signature);
+    return cut;
+}
+
+void RigBuilder::end_shot() {
+    if (shot_maps_.empty()) return;
+    Shot shot = light_shot(shot_maps_, shot_needs_);
+    for (std::size_t t = 0; t < shot.lights.size(); ++t) {
+        raw_.push_back(std::move(shot.lights[t]));
+        cuts_.push_back(shot.cuts[t]);
+        errors_.push_back(shot.errors[t]);
+        counts_.push_back(shot.count);
+    }
+    shot_maps_.clear();
+    shot_needs_.clear();
+}
+
+RigBuilder::Shot RigBuilder::light_shot(const std::vector<EnvironmentMap>& maps, const std::vector<int>& needs) const {
+    Shot shot;
+    shot.count = *std::max_element(needs.begin(), needs.end());
+    LightOptions o = options_.lights;
+    o.count = shot.count;
+    // Resampled frames are one shot for the temporal filter, as without the
+    // adaptive count; a followed shot starts afresh at its first frame.
+    std::optional<LightTracker> tracker;
+    if (following()) tracker.emplace(o, options_.track);
+    for (std::size_t t = 0; t < maps.size(); ++t) {
+        bool cut = raw_.empty() && t == 0;
+        shot.lights.push_back(tracker ? tracker->next(maps[t], cut) : compute_lights(maps[t], o));
+        shot.cuts.push_back(cut);
+        shot.errors.push_back(rig_error(maps[t], shot.lights.back().lights, o.sun_model, o.luminance, 128, o.threads));
+    }
+    return shot;
+}
+
 bool RigBuilder::following() const {
-    return options_.tracking == Tracking::follow && options_.lights.power == PowerMode::region &&
-           options_.adaptive_tolerance <= 0.0;
+    return options_.tracking == Tracking::follow && options_.lights.power == PowerMode::region;
 }
 
 LightRig RigBuilder::finish(double source_fps) const {
@@ -73,6 +120,16 @@ LightRig RigBuilder::finish(double source_fps) const {
                             : source_fps > 0.0              ? source_fps
                                                             : 21.0;
     std::vector<FrameLights> frames = raw_;
+    std::vector<bool> cuts = cuts_;
+    std::vector<double> errors = errors_;
+    std::vector<int> counts = counts_;
+    if (!shot_maps_.empty()) {  // the last shot of an adaptive rig
+        Shot shot = light_shot(shot_maps_, shot_needs_);
+        std::move(shot.lights.begin(), shot.lights.end(), std::back_inserter(frames));
+        cuts.insert(cuts.end(), shot.cuts.begin(), shot.cuts.end());
+        errors.insert(errors.end(), shot.errors.begin(), shot.errors.end());
+        counts.insert(counts.end(), shot.lights.size(), shot.count);
+    }
     int slots = 0;
     for (const auto& f : frames) slots = std::max(slots, int(f.lights.size()));
     rig.slots = slots;
@@ -82,7 +139,7 @@ LightRig RigBuilder::finish(double source_fps) const {
         // Shot by shot: light k of one shot has nothing to do with light k of the next.
         for (std::size_t begin = 0; begin < frames.size();) {
             std::size_t end = begin + 1;
-            while (end < frames.size() && !cuts_[end]) ++end;
+            while (end < frames.size() && !cuts[end]) ++end;
             std::vector<FrameLights> shot(frames.begin() + long(begin), frames.begin() + long(end));
             filter_lights(shot, rig.filter, options_.filter_brightness);  // absent lights count as power 0
             std::move(shot.begin(), shot.end(), frames.begin() + long(begin));
@@ -109,7 +166,12 @@ LightRig RigBuilder::finish(double source_fps) const {
     for (std::size_t t = 0; t < frames.size(); ++t) {
         RigFrame& out = rig.frames[t];
         out.defects = defects_[t];
-        out.adaptive_error = errors_[t];
+        out.adaptive_error = errors[t];
+        if (!counts.empty()) {
+            out.adaptive_count = counts[t];
+            rig.adaptive_count = std::max(rig.adaptive_count, counts[t]);
+            rig.adaptive_error = std::max(rig.adaptive_error, errors[t]);
+        }
         std::vector<Light> lights = frames[t].lights;
         if (options_.cluster_max > 0) {
             ClusterOptions co;

@@ -3,7 +3,8 @@
 // clustering, rotation into Blender world coordinates.
 //
 //   per frame:  radiance → EnvironmentMap → luminance PDF → sampler → lights
-//               (fixed count, or adaptive up to the count as a budget)
+//               (fixed count, or adaptive up to the count as a budget:
+//               one count per shot, the largest any of its frames needs)
 //               (or carried over from the previous frame: tracking.hpp)
 //   finish():   FIR filter per light index within each shot (temporal.hpp)
 //               → clustering per frame (clustering.hpp) → world_from_map ·
@@ -30,6 +31,7 @@
 #include "lights/environment.hpp"
 #include "lights/frame_lights.hpp"
 #include "lights/map_reader.hpp"
+#include "lights/motion.hpp"
 #include "lights/temporal.hpp"
 #include "lights/tracking.hpp"
 
@@ -39,8 +41,7 @@ struct RigOptions {
     MapOptions map;
     LightOptions lights;            // lights.count is the count, or the budget when adaptive
     // How lights carry over from frame to frame (tracking.hpp). FOLLOW needs
-    // region powers and a fixed count; equal powers and the adaptive count
-    // always resample.
+    // region powers; equal powers always resample.
     Tracking tracking = Tracking::follow;
     TrackingOptions track;
     bool temporal_filter = true;
@@ -50,7 +51,12 @@ struct RigOptions {
     int cluster_max = 0;            // Q; 0 = no clustering
     static constexpr Range<int> cluster_max_range{0, unbounded_int};
     double cluster_correction = 1.85;
-    double adaptive_tolerance = 0.0;  // > 0: per frame the fewest lights within this irradiance error
+    // > 0: per shot the fewest lights (up to lights.count, and the renderer's
+    // max_lights) whose fitted suns, as lights.sun_model draws them, keep
+    // every frame of the shot within this irradiance error (adaptive_count).
+    // The frames of a shot wait in memory (their working maps) until the
+    // next cut, so that the shot is tracked with the one count it needs.
+    double adaptive_tolerance = 0.0;
     static constexpr Range<double> adaptive_tolerance_range{0.0, 1.0};
     Eigen::Matrix3d world_from_map = Eigen::Matrix3d::Identity();
 };
@@ -61,7 +67,9 @@ struct RigFrame {
     Eigen::Vector3d total_rgb = Eigen::Vector3d::Zero();
     double total_power = 0.0;
     PixelDefects defects;
-    double adaptive_error = -1.0;    // the irradiance error met (adaptive count only)
+    double adaptive_error = -1.0;    // the irradiance error of this frame's lights at its shot's count
+                                     // (rig_error, before the temporal filter; adaptive count only)
+    int adaptive_count = 0;          // the count of this frame's shot (adaptive count only)
 };
 
 struct LightRig {
@@ -71,6 +79,8 @@ struct LightRig {
     FirFilter filter;                // empty when not filtered
     double frames_per_second = 0.0;
     double cluster_radius = 0.0;     // ε used in the last frame (0: no clustering)
+    int adaptive_count = 0;          // the largest shot count (adaptive count only)
+    double adaptive_error = -1.0;    // the largest frame error at its shot's count (adaptive count only)
 };
 
 class RigBuilder {
@@ -83,13 +93,25 @@ public:
     // One frame already made into a working map with options().map (e.g. by
     // LightSource::read_map, which streams large files).
     void add_map(EnvironmentMap map);
-    int frame_count() const { return int(raw_.size()); }
+    int frame_count() const { return int(raw_.size() + shot_maps_.size()); }
     const EnvironmentMap& last_map() const { return last_map_; }
     const RigOptions& options() const { return options_; }
 
     LightRig finish(double source_frames_per_second = 0.0) const;
 
 private:
+    // The lights of one shot's frames at one count (the largest any frame
+    // needs), with the cuts the tracker saw and each frame's error.
+    struct Shot {
+        std::vector<FrameLights> lights;
+        std::vector<bool> cuts;
+        std::vector<double> errors;
+        int count = 0;
+    };
+    Shot light_shot(const std::vector<EnvironmentMap>& maps, const std::vector<int>& needs) const;
+    void end_shot();
+    bool starts_shot(const EnvironmentMap& map);
+
     RigOptions options_;
     bool following() const;
     std::vector<FrameLights> raw_;
@@ -97,6 +119,13 @@ private:
     std::optional<LightTracker> tracker_;
     std::vector<PixelDefects> defects_;
     std::vector<double> errors_;
+    std::vector<int> counts_;        // the shot count per frame (adaptive only)
+    // Adaptive only: the current shot's maps and the count each needs, and
+    // the signature and motion that tell where the next shot starts.
+    std::vector<EnvironmentMap> shot_maps_;
+    std::vector<int> shot_needs_;
+    MapSignature signature_;
+    Eigen::Matrix3d motion_ = Eigen::Matrix3d::Identity();
     EnvironmentMap last_map_;
 };
 

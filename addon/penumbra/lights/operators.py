@@ -208,15 +208,26 @@ class _Job:
             write.rollback()
             raise
         write.commit()
+        self.store_adaptive(s, rig)
         collection = write.collection
         defects = {k: sum(d[k] for d in rig["defects"]) for k in ("nan", "inf", "negative")}
         bad = sum(defects.values())
         msg = (f"{rig['slots']} lights over {len(rig['defects'])} frame(s) in '{collection.name}'; JSON: {json_path}")
+        if s.adaptive_count > 0:
+            msg += f"; adaptive: {s.adaptive_count} suns, error {100.0 * s.adaptive_error:.2f} %"
         if bad:
             msg += (f"; replaced {defects['nan']} NaN, {defects['inf']} Inf and {defects['negative']} "
                     "negative pixel values by 0")
         s.last_report = msg[:250]
         return msg, bad
+
+    @staticmethod
+    def store_adaptive(settings_, rig):
+        """Keeps the adaptive count's choice in the .blend (0 and -1: a fixed count)."""
+        count = int(rig["adaptive_count"])
+        errors = np.asarray(rig["adaptive_error"], dtype=float)
+        settings_.adaptive_count = count
+        settings_.adaptive_error = float(errors.max()) if count > 0 and errors.size else -1.0
 
     def write_json(self, path, text):
         """Publishes the rig's JSON, last, once the rig is in the scene (a failed

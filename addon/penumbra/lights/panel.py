@@ -71,6 +71,9 @@ class PENUMBRA_PT_light_rig_sampling(_SubPanel, bpy.types.Panel):
         temporal.prop(s, "filter_brightness", text="Brightness")
         layout.prop(s, "cluster_max", text="Clusters")
         layout.prop(s, "adaptive_tolerance", text="Tolerance")
+        if s.adaptive_count > 0:
+            sidebar.draw_wrapped(layout, context, f"Last build chose {s.adaptive_count} suns, "
+                                 f"error {100.0 * s.adaptive_error:.2f} %")
 
 
 class PENUMBRA_PT_light_rig_output(_SubPanel, bpy.types.Panel):

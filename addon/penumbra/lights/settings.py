@@ -65,7 +65,8 @@ class LightRigSceneSettings(bpy.types.PropertyGroup):
                                        description="Merge nearby lights into at most this many (0: off)")
     adaptive_tolerance: bpy.props.FloatProperty(
         name="Adaptive Tolerance", **limits("lights.adaptive_tolerance"), subtype="FACTOR",
-        description="Per frame, the fewest lights whose irradiance error stays below this (0: fixed count)")
+        description="Per shot, the fewest suns (Lights is the budget) whose irradiance error, as the target "
+                    "renderer draws them, stays below this in every frame (0: fixed count)")
     frame_start: bpy.props.IntProperty(name="Start", default=1, description="Scene frame of the source's first frame")
     frame_end: bpy.props.IntProperty(name="End", default=250, description="Last scene frame to fill")
     limit_shadows: bpy.props.BoolProperty(
@@ -82,6 +83,15 @@ class LightRigSceneSettings(bpy.types.PropertyGroup):
                                         description="Per-frame lights for game engines, written beside the .blend")
     collection: bpy.props.PointerProperty(type=bpy.types.Collection, name="Rig Collection")
     last_report: bpy.props.StringProperty(name="Last Build", default="")
+    # What the last build's adaptive count chose, kept with the .blend so the
+    # panel shows it after reopening (0 and -1: the last build had a fixed count).
+    adaptive_count: bpy.props.IntProperty(
+        name="Chosen Count", default=0, min=0,
+        description="Suns the last adaptive build chose: the largest count any shot needed within the tolerance")
+    adaptive_error: bpy.props.FloatProperty(
+        name="Error Reached", default=-1.0, subtype="FACTOR",
+        description="The largest irradiance error of any frame at its shot's chosen count, the suns drawn as the "
+                    "target renderer draws them (-1: fixed count)")
 
 
 classes = (LightRigSceneSettings,)

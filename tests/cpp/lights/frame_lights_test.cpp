@@ -152,9 +152,11 @@ TEST(LightsFrameLights, hemispherical_input_gives_lights_over_the_upper_hemisphe
 TEST(LightsFrameLights, adaptive_count_meets_the_tolerance_with_fewer_lights_when_looser) {
     const EnvironmentMap map = as_map(testing::sky_and_sun(256, 128, 0.3, Eigen::Vector3d(0.5, 0.1, 0.6), 0.1, 30.0));
     LightOptions o;
-    const AdaptiveResult loose = adaptive_count(map, o, 0.05, 512);
+    // Fitted suns drawn as Cycles draws them reach 1 % with 3 (0.2 % too):
+    // only a loose tolerance leaves fewer.
+    const AdaptiveResult loose = adaptive_count(map, o, 0.2, 512);
     const AdaptiveResult tight = adaptive_count(map, o, 0.01, 512);
-    EXPECT_LE(loose.error, 0.05);
+    EXPECT_LE(loose.error, 0.2);
     EXPECT_LE(tight.error, 0.01);
     EXPECT_LT(loose.count, tight.count);
     EXPECT_GE(loose.count, 1);
