@@ -3,8 +3,9 @@ procedural rigged character, bake its pose-space visibility model from the
 odd frames, and shade even frames it never saw. On each of those poses,
 Cycles' own ambient-occlusion bake is the reference for Penumbra's
 `penumbra_visibility`; the contact sheet shows both, their absolute
-difference and Penumbra's shading under one of Blender's bundled HDR worlds.
-run(out_folder, demo) -> dict."""
+difference and Penumbra's shading under one of Blender's bundled HDR worlds,
+then the GPU preview's shading of an unseen pose read back beside the CPU's
+(examples/demo_visibility_gpu.py). run(out_folder, demo) -> dict."""
 
 import json
 import os
@@ -19,12 +20,14 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import contact_sheet as cs  # noqa: E402  (examples/contact_sheet.py)
 import demo_render  # noqa: E402  (examples/demo_render.py)
+import demo_visibility_gpu  # noqa: E402  (examples/demo_visibility_gpu.py)
 
 HELD_OUT = (6, 12, 18)  # even frames: the model was baked from the odd ones
 COMPARE = "demo_ao_compare"  # point colour: (Cycles AO, Penumbra AO, |difference|)
 DIFFERENCE_SCALE = 0.05  # |Δ AO| at the bright end of the heat ramp
 AO_BLACK = 0.5  # AO shown black; 1 is white (the character occludes little of its own sky)
 BRDFS = {6: "DIFFUSE", 12: "PHONG", 18: "TRANSLUCENT"}
+GPU_POSE = 12  # the unseen pose the GPU preview's readback shows (both modes shade it)
 
 
 def _settings(quick):
@@ -158,6 +161,22 @@ def _compare_pose(obj, scene, frame, settings, out_folder, materials, heads):
     return row, caption, errors
 
 
+def _gpu_row(obj, scene, settings, out_folder):
+    """The GPU preview's readback of GPU_POSE beside the CPU shading (or why it did not run)."""
+    def render_attribute(name):
+        obj.data.materials[0] = bpy.data.materials.get(f"show {name}") or _emission_material(f"show {name}", name)
+        return demo_render.render(scene, os.path.join(out_folder, f"frame{GPU_POSE:02d}_{name}.exr"), settings["spp"])
+
+    def tile(rgb, alpha):
+        return cs.enlarge(cs.over(rgb, alpha, cs.BACKGROUND), settings["enlarge"])
+
+    shading = obj.data.materials[0]
+    try:
+        return demo_visibility_gpu.row(obj, scene, GPU_POSE, BRDFS[GPU_POSE], render_attribute, tile)
+    finally:
+        obj.data.materials[0] = shading
+
+
 def run(out_folder, demo):
     sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
     import visibility_character
@@ -194,11 +213,14 @@ def run(out_folder, demo):
         poses.append(errors)
     mean_abs = float(np.mean([p["mean_abs"] for p in poses]))
     sheet.row([cs.Tile(cs.heat_legend(DIFFERENCE_SCALE), ["difference scale"])])
+    gpu_tiles, gpu_caption, gpu_result = _gpu_row(obj, scene, settings, out_folder)
+    sheet.row(gpu_tiles, gpu_caption)
     sheet_path = demo.sheet_path("visibility")
     size = sheet.write(sheet_path)
     poses_made = f"{len(poses)} unseen pose" + ("s" if len(poses) > 1 else "")
     demo.step("visibility sheet", f"{os.path.basename(sheet_path)}: {poses_made}, {size[0]}×{size[1]}",
-              f"mean |ΔAO| {mean_abs:.4f} vs Cycles AO", time.perf_counter() - started)
+              f"mean |ΔAO| {mean_abs:.4f} vs Cycles AO; {demo_visibility_gpu.summary_line(gpu_result)}",
+              time.perf_counter() - started)
     return {
         "vertices": vertices,
         "hdri": hdri,
@@ -208,5 +230,6 @@ def run(out_folder, demo):
         "holdout_ao_mean_abs": report["model_holdout"]["ao_mean_abs"],
         "seconds_bake_and_fit": round(bake_seconds, 3),
         "unseen_poses_vs_cycles_ao": poses,
+        "gpu_preview_vs_cpu": gpu_result,
         "sheet": sheet_path,
     }

@@ -24,6 +24,7 @@ SHEETS = ("visibility", "lights", "colormap")
 STEPS = ["image I/O", "visibility model", "visibility sheet", "light rig", "lights sheet", "animated rig",
          "colour-map lookup", "colour-map sheet"]
 MAX_PRINTED_LINES = 200
+GPU_BLENDER = "bpy-5.2"  # the Blender whose demo reads the GPU preview back (after gpu.init())
 
 @pytest.fixture(scope="module")
 def quick_demo(tmp_path_factory):
@@ -89,6 +90,13 @@ def test_demo_errors_say_what_the_readme_says(quick_demo):
     for name, summary in summaries.items():
         visibility = summary["visibility"]
         assert all(p["mean_abs"] < 0.03 for p in visibility["unseen_poses_vs_cycles_ao"]), name
+        # The GPU preview's readback of an unseen pose against the CPU shading
+        # (issue 27's tolerance); the other Blenders' sheets say why it did not run.
+        gpu = visibility["gpu_preview_vs_cpu"]
+        if name == GPU_BLENDER:
+            assert gpu["max_abs"] < 1e-3 and gpu["vertices"] > 0 and gpu["preview_cpu_ms_per_frame"] > 0, gpu
+        else:
+            assert gpu["not_run"].startswith("no GPU available"), (name, gpu)
         lights = summary["light_rig"]["static"]
         assert lights["suns"] == 64 and lights["render_relative_rmse"] < 0.15, name
         assert abs(lights["render_mean_ratio"] - 1.0) < 0.05, name
