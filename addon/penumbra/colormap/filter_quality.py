@@ -7,11 +7,22 @@ import collections
 import json
 import os
 
-Quality = collections.namedtuple("Quality", "label taps analytic_octaves mixture description")
+# native: the one evaluation is the user's Noise Texture with its Detail cut
+# at the sample's resolution (native_filter.py), where the noise allows it;
+# taps_at_one: a one-tap preset keeps the 16 taps for one sample.
+Quality = collections.namedtuple("Quality", "label taps analytic_octaves mixture description native taps_at_one",
+                                 defaults=(False, True))
 
 # Presets: taps per sample, the finest octaves carried only as variance,
 # and whether the ramp reads a mixture of four Gaussians or one.
 QUALITIES = collections.OrderedDict([
+    ("NATIVE", Quality("1 Noise", 1, 0, False,
+                       "One Noise Texture with its Detail cut at the sample's resolution, the octaves left out "
+                       "carried as variance; one lookup; the 16 taps kept for one sample (other noises: as 1 Eval)",
+                       native=True)),
+    ("NATIVE_ONLY", Quality("1 Noise Only", 1, 0, False,
+                            "As 1 Noise at one sample too: cheapest there, about 2.5× the 16 taps' error at one "
+                            "sample", native=True, taps_at_one=False)),
     ("POINT", Quality("1 Eval", 1, 0, False,
                       "Each octave once at the sample, the ones finer than the footprint faded out and carried "
                       "as variance; one lookup")),
@@ -24,10 +35,12 @@ QUALITIES = collections.OrderedDict([
                                 "(the filter of Penumbra 0.x before the presets; files baked then use it)")),
 ])
 # The lowest mean equal-time RMSE ratio at 16 spp among the presets that
-# converge to the plain ramp (filter_quality.json; docs/colormap-benchmark.md,
-# "Equal time"). POINT_COARSE measured lower (1.27 against 1.37) but never
-# evaluates the finest octave, so it stays blurred where that is resolved.
-DEFAULT = "POINT"
+# converge to the plain ramp and keep the 16 taps for one sample (the
+# per-sample verdict at one sample of issue #12; filter_quality.json;
+# docs/colormap-benchmark.md, "Equal time"). POINT_COARSE never evaluates
+# the finest octave, so it stays blurred where that is resolved;
+# NATIVE_ONLY renders the same groups above one sample.
+DEFAULT = "NATIVE"
 # What a Noise Filter node baked before the presets (no penumbra_quality) is.
 LEGACY = "TAPS_16_MIXTURE"
 NODE_PROPERTY = "penumbra_quality"

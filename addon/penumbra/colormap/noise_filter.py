@@ -10,7 +10,7 @@ import math
 
 import bpy
 
-from . import noise_nodes, point_filter
+from . import native_filter, noise_nodes, point_filter
 from .node_builder import Builder, new_group, zero_after
 from .node_groups import NOISE_FILTER
 from .noise_maths import MIXTURE_COMPONENTS, TAP_COUNT, TAP_COUNTS, major_taps
@@ -28,7 +28,7 @@ KERNEL_SHARE_EXPONENT = 0.5
 
 
 def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_COUNT, analytic_octaves=0,
-                       point=False, with_taps=True):
+                       point=False, with_taps=True, native=False):
     """Vector, Scale, Units per World, Minor, Major, Axis U, Axis V, Samples,
     W -> Mean, Sigma, Offsets, Variances: the octave-wise filter of the noise
     `model` (noise_maths.NoiseModel: offset + Σ c_i (Fac_i − 0.5), Fac_i a
@@ -70,15 +70,20 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_CO
     whole render (Samples is set by its driver), so Cycles folds the choice
     and removes the branch it does not take (point_filter.select).
     with_taps=False (point only): the same interface without the taps, for
-    more than one sample (Mixture, Offsets and Variances stay 0)."""
+    more than one sample (Mixture, Offsets and Variances stay 0).
+    native=True (point only): the one evaluation is one Noise Texture with
+    its Detail cut at the sample's resolution (native_filter.py) where that
+    noise allows it (native_filter.applies), else as point=True."""
     coefficients, offset, lacunarity = model.coefficients, model.offset, model.lacunarity
     if taps not in TAP_COUNTS:
         raise ValueError(f"taps must be one of {TAP_COUNTS}, not {taps}")
     if analytic_octaves and not point:
         raise ValueError("only the one-evaluation filter (point=True) leaves octaves out")
+    native = native and point and native_filter.applies(model)
     key = (f"{model.dimensions} " + "/".join(f"{c:.6g}" for c in coefficients) +
            f" o{offset:g} l{lacunarity:g} d{model.distortion:g} w{model.w} k{filter_stddev_px:.4g} t{taps}" +
-           (f" p{analytic_octaves}" if point else "") + ("" if with_taps else " only"))
+           (f" p{analytic_octaves}" if point else "") + (" n" if native else "") +
+           ("" if with_taps else " only"))
     name = f"{NOISE_FILTER} ({key} spp)"
     group = bpy.data.node_groups.get(name)
     if group is not None and group.get("penumbra_version") == NOISE_FILTER_VERSION:
@@ -103,13 +108,13 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_CO
     group["penumbra_taps"] = taps
     group["penumbra_point"] = point
     group["penumbra_analytic_octaves"] = analytic_octaves
+    group["penumbra_native"] = native
     b = Builder(group)
     share = _kernel_share(b, gin.outputs["Samples"])
     if point and not with_taps:
-        mean, variance = point_filter.point_estimate(b, gin, model, table["total_var"], filter_stddev_px, share,
-                                                     analytic_octaves)
+        mean, sigma = _one_evaluation(b, gin, model, table, filter_stddev_px, share, analytic_octaves, native)
         b.connect(mean, gout.inputs["Mean"])
-        b.links.new(b.math("SQRT", b.math("MAXIMUM", variance, 0.0)), gout.inputs["Sigma"])
+        b.links.new(sigma, gout.inputs["Sigma"])
         group["penumbra_version"] = NOISE_FILTER_VERSION
         return group
     log2_s, v = _footprint_table_coordinates(b, gin, table, filter_stddev_px, share)
@@ -125,10 +130,10 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_CO
     sigma = b.math("SQRT", b.math("MAXIMUM", b.math("ADD", variance, spread), 0.0))
     if point:
         one_sample = b.math("LESS_THAN", gin.outputs["Samples"], 1.5)
-        point_mean, point_variance = point_filter.point_estimate(
-            b, gin, model, table["total_var"], filter_stddev_px, share, analytic_octaves)
+        point_mean, point_sigma = _one_evaluation(b, gin, model, table, filter_stddev_px, share,
+                                                  analytic_octaves, native)
         mean = point_filter.select(b, one_sample, point_mean, mean)
-        sigma = point_filter.select(b, one_sample, b.math("SQRT", b.math("MAXIMUM", point_variance, 0.0)), sigma)
+        sigma = point_filter.select(b, one_sample, point_sigma, sigma)
         b.links.new(one_sample, gout.inputs["Mixture"])
     b.connect(mean, gout.inputs["Mean"])
     b.links.new(sigma, gout.inputs["Sigma"])
@@ -136,6 +141,17 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_CO
     b.links.new(variances, gout.inputs["Variances"])
     group["penumbra_version"] = NOISE_FILTER_VERSION
     return group
+
+
+def _one_evaluation(b, gin, model, table, filter_stddev_px, share, analytic_octaves, native):
+    """(mean, sigma) of the one-evaluation filters: the band-limited Noise
+    Texture (native; its curve gives sigma) or the octaves at the sample
+    (point_filter)."""
+    if native:
+        return native_filter.native_estimate(b, gin, model, table["total_var"], filter_stddev_px, share)
+    mean, variance = point_filter.point_estimate(b, gin, model, table["total_var"], filter_stddev_px, share,
+                                                 analytic_octaves)
+    return mean, b.math("SQRT", b.math("MAXIMUM", variance, 0.0))
 
 
 def _kernel_share(b, samples):

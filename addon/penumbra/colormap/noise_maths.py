@@ -148,6 +148,58 @@ def octave_weights(detail, roughness, blender_version):
     return weights
 
 
+def fbm_detail_roughness(coefficients):
+    """(Detail, Roughness) whose normalized fBm weights (octave_weights) are
+    `coefficients`, or None when none are (fewer than three octaves, where
+    Roughness is not determined, or a roughness of 0). The band-limited
+    filter (native_filter.py) rebuilds the noise from them."""
+    if len(coefficients) < 3 or coefficients[0] <= 0.0 or coefficients[1] <= 0.0:
+        return None
+    r = coefficients[1] / coefficients[0]
+    whole = len(coefficients) - 1
+    partial = len(coefficients) - 2
+    fraction = coefficients[-1] * sum(r ** i for i in range(partial + 2)) / r ** (partial + 1)
+    for detail in (float(whole), partial + fraction):
+        if not 0.0 <= detail <= 15.0:
+            continue
+        weights = octave_weights(detail, r, (4, 0, 0))
+        if len(weights) == len(coefficients) and all(abs(a - b) <= 1e-6 * max(abs(b), 1e-3)
+                                                      for a, b in zip(weights, coefficients)):
+            return detail, r
+    return None
+
+
+def band_limited_terms(x, coefficients, detail, r, lacunarity, total_var, bias):
+    """(D', k·g₀, σ) at x: Blender's normalized fBm at Detail D' = n + f is
+    0.5 + Σ_{i≤n} r^i α s_i/2 + f r^(n+1) s_(n+1)/(2 M_(n+1)), α = (1 − f)/M_n
+    + f/M_(n+1), M_m = Σ_{i≤m} r^i (fractal_noise.h, 3.4 and 4.x); times
+    k = c_0/α its octaves i ≤ n get the model's weights c_i = c_0 r^i and
+    octave n + 1 a weight w ≤ c_(n+1). The estimate is shrunk by octave 0's
+    g₀ = (1 + L^(−2x))^(−½) (noise_maths.point_shrinkage: Detail 0 still
+    evaluates octave 0, aliased at the horizon). σ² = V₀ (E + (Σc² − E)(1 −
+    g₀²)), E = Σ_(i>n+1) c_i² + (c_(n+1) − w)²: what is left out, plus what
+    the shrunk octaves lose. D' = x + bias in [0, D]. The band-limited
+    filter (native_filter.py) bakes these into its curves."""
+    cut = min(max(x + bias, 0.0), detail)
+    n = int(math.floor(cut))
+    f = cut - n
+    if n >= len(coefficients) - 1:
+        n, f = len(coefficients) - 1, 0.0
+
+    def amplitude_sum(m):
+        return sum(r ** i for i in range(m + 1))
+    alpha = (1.0 - f) / amplitude_sum(n) + f / amplitude_sum(n + 1)
+    k = coefficients[0] / alpha
+    w = k * f * r ** (n + 1) / amplitude_sum(n + 1)
+    left = sum(c * c for c in coefficients[n + 2:])
+    if n + 1 < len(coefficients):
+        left += (coefficients[n + 1] - w) ** 2
+    total = sum(c * c for c in coefficients)
+    g0 = (1.0 + math.exp(min(-2.0 * x * math.log(lacunarity), 700.0))) ** -0.5
+    variance = total_var * (left + (total - left) * (1.0 - g0 * g0))
+    return cut, k * g0, math.sqrt(max(variance, 0.0))
+
+
 # ---- taps of the Noise Filter ------------------------------------------------
 
 # Components of the Gaussian mixture the Noise Filter hands the filtered ramp

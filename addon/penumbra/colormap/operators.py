@@ -14,7 +14,8 @@ import tempfile
 import bpy
 import numpy as np
 
-from . import filter_quality, filtered_ramp, footprint, noise_filter, noise_maths, noise_model, noise_statistics
+from . import filter_quality, filtered_ramp, footprint, native_filter, noise_filter, noise_maths, noise_model
+from . import noise_statistics
 from . import node_groups, point_footprint, ramp as ramp_io, sample_count
 from .material import BakeError, Rollback, editable_material
 from .surface_filter import filters_of
@@ -360,23 +361,29 @@ class BakePlan:
     def _wire_noise(self, tree, group_node, source):
         octave_image, table = noise_statistics.octave_image(self.folder)
         filter_node = tree.nodes.new("ShaderNodeGroup")
+        # Band-limited without taps at one sample either: one group for
+        # every sample count (native_filter.py).
+        band_limited = self.quality.native and not self.quality.taps_at_one and \
+            native_filter.applies(self.noise_model)
         filter_node.node_tree = noise_filter.noise_filter_group(octave_image, table, self.noise_model,
                                                                 self.filter_stddev, self.taps,
-                                                                self.quality.analytic_octaves, self.point)
+                                                                self.quality.analytic_octaves, self.point,
+                                                                with_taps=not band_limited, native=self.quality.native)
         filter_node[filter_quality.NODE_PROPERTY] = self.quality_key
         eevee_taps = noise_maths.tap_count(self.noise_model, "BLENDER_EEVEE")
-        if eevee_taps < self.taps:
+        if eevee_taps < self.taps and not band_limited:
             # Too costly for EEVEE at this many taps: keep a smaller group
             # for it, which the render_init handler swaps in.
             sample_count.remember_group(filter_node, sample_count.GROUP_FOR_CYCLES, filter_node.node_tree)
             eevee = noise_filter.noise_filter_group(octave_image, table, self.noise_model, self.filter_stddev,
-                                                    eevee_taps, self.quality.analytic_octaves, self.point)
+                                                    eevee_taps, self.quality.analytic_octaves, self.point,
+                                                    native=self.quality.native)
             sample_count.remember_group(filter_node, sample_count.GROUP_FOR_EEVEE, eevee)
-        if self.point:
+        if self.point and not band_limited:
             sample_count.remember_group(filter_node, sample_count.GROUP_AT_ONE_SAMPLE, filter_node.node_tree)
             above = noise_filter.noise_filter_group(octave_image, table, self.noise_model, self.filter_stddev,
                                                     self.taps, self.quality.analytic_octaves, point=True,
-                                                    with_taps=False)
+                                                    with_taps=False, native=self.quality.native)
             sample_count.remember_group(filter_node, sample_count.GROUP_ABOVE_ONE_SAMPLE, above)
             sample_count.fit_group(filter_node, self.scene)
         sample_count.drive_samples(filter_node, self.scene)

@@ -6,10 +6,11 @@ read log-log off its own 1–256 spp curve at each filtered render's time.
 
 The 16-tap preset of the previous versions must fail the issue's goal
 (≤ 0.7× the plain ramp's error at equal time) by more than the 20 % margin.
-The default preset does not meet 0.7× either (docs/colormap.md, "One
-evaluation per sample"): what is asserted of it is what it reaches, with a
-margin: at least 1.5× better than the 16-tap preset at equal time at 4 and
-16 spp (measured: about 2×)."""
+The default preset (1 Noise: one Noise Texture with its Detail cut at the
+sample's resolution) does not meet 0.7× either (measured 0.78–0.92 at 16
+spp, docs/colormap.md, "One Noise Texture per sample"): what is asserted of
+it is what it reaches, with a margin: at least 2× better than the 16-tap
+preset at equal time at 4 and 16 spp (measured: about 3×)."""
 
 import os
 
@@ -57,4 +58,4 @@ def test_sixteen_taps_fail_the_equal_time_goal(ratios, spp):
 @pytest.mark.parametrize("spp", FILTERED_SPP)
 def test_default_preset_beats_sixteen_taps_at_equal_time(ratios, spp):
     assert filter_quality.DEFAULT != LEGACY
-    assert ratios[filter_quality.DEFAULT][spp] * 1.5 < ratios[LEGACY][spp], ratios
+    assert ratios[filter_quality.DEFAULT][spp] * 2.0 < ratios[LEGACY][spp], ratios

@@ -1,5 +1,6 @@
-"""The Noise Filter's quality presets (issue #25): what the default bakes
-(the one-evaluation filter above one sample, the 16 taps at one), the groups
+"""The Noise Filter's quality presets (issue #25): what 1 Eval bakes
+(the one-evaluation filter above one sample, the 16 taps at one; the
+default 1 Noise: test_colormap_native.py), the groups
 the render swaps by sample count, and the preset saved with the .blend."""
 
 import bpy
@@ -13,9 +14,10 @@ def _node(material, prefix):
     return next(n for n in material.node_tree.nodes if n.name.startswith(prefix))
 
 
-def test_default_preset_bakes_one_evaluation_above_one_sample(addon, tmp_path):
+def test_one_eval_preset_bakes_one_evaluation_above_one_sample(addon, tmp_path):
     addon.penumbra.colormap.output_folder = str(tmp_path)
-    assert addon.penumbra.colormap.filter_quality == filter_quality.DEFAULT == "POINT"
+    assert addon.penumbra.colormap.filter_quality == filter_quality.DEFAULT == "NATIVE"
+    addon.penumbra.colormap.filter_quality = "POINT"
     material, ramp, emission, camera = _render_scene(addon, 70.0)
     addon.render.resolution_x, addon.render.resolution_y = 8, 6
     assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
