@@ -80,35 +80,9 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_CO
     if analytic_octaves and not point:
         raise ValueError("only the one-evaluation filter (point=True) leaves octaves out")
     native = native and point and native_filter.applies(model)
-    key = (f"{model.dimensions} " + "/".join(f"{c:.6g}" for c in coefficients) +
-           f" o{offset:g} l{lacunarity:g} d{model.distortion:g} w{model.w} k{filter_stddev_px:.4g} t{taps}" +
-           (f" p{analytic_octaves}" if point else "") + (" n" if native else "") +
-           ("" if with_taps else " only"))
-    name = f"{NOISE_FILTER} ({key} spp)"
-    group = bpy.data.node_groups.get(name)
-    if group is not None and group.get("penumbra_version") == NOISE_FILTER_VERSION:
+    group, gin, gout = _filter_group(model, filter_stddev_px, taps, analytic_octaves, point, with_taps, native)
+    if gin is None:   # this filter, built by this version: reuse it
         return group
-    if group is not None:   # built by an older Penumbra: materials that use it keep it
-        group.name = name + " (old)"
-    group, gin, gout = new_group(name, [("Vector", "NodeSocketVector", (0.0, 0.0, 0.0)),
-                                        ("Scale", "NodeSocketFloat", 5.0),
-                                        ("Units per World", "NodeSocketFloat", 1.0),
-                                        ("Minor", "NodeSocketFloat", 0.0), ("Major", "NodeSocketFloat", 0.0),
-                                        ("Axis U", "NodeSocketVector", (0.0, 0.0, 0.0)),
-                                        ("Axis V", "NodeSocketVector", (0.0, 0.0, 0.0)),
-                                        ("Samples", "NodeSocketFloat", 1.0),
-                                        ("W", "NodeSocketFloat", 0.0)] +
-                                 ([("Point Minor", "NodeSocketFloat", 0.0), ("Point Major", "NodeSocketFloat", 0.0)]
-                                  if point else []),
-                                 [("Mean", "NodeSocketFloat"), ("Sigma", "NodeSocketFloat"),
-                                  ("Offsets", "NodeSocketVector"), ("Variances", "NodeSocketVector")] +
-                                 ([("Mixture", "NodeSocketFloat")] if point else []))
-    group["penumbra_octave_coefficients"] = list(coefficients)
-    group["penumbra_octave_offset"] = offset
-    group["penumbra_taps"] = taps
-    group["penumbra_point"] = point
-    group["penumbra_analytic_octaves"] = analytic_octaves
-    group["penumbra_native"] = native
     b = Builder(group)
     share = _kernel_share(b, gin.outputs["Samples"])
     if point and not with_taps:
@@ -142,6 +116,43 @@ def noise_filter_group(octave_image, table, model, filter_stddev_px, taps=TAP_CO
     group["penumbra_version"] = NOISE_FILTER_VERSION
     return group
 
+
+
+def _filter_group(model, filter_stddev_px, taps, analytic_octaves, point, with_taps, native):
+    """The Noise Filter group named for its settings: (group, None, None) when
+    this version built it already, else a new empty one with its sockets and
+    settings recorded, and its Group Input and Output nodes."""
+    coefficients, offset, lacunarity = model.coefficients, model.offset, model.lacunarity
+    key = (f"{model.dimensions} " + "/".join(f"{c:.6g}" for c in coefficients) +
+           f" o{offset:g} l{lacunarity:g} d{model.distortion:g} w{model.w} k{filter_stddev_px:.4g} t{taps}" +
+           (f" p{analytic_octaves}" if point else "") + (" n" if native else "") +
+           ("" if with_taps else " only"))
+    name = f"{NOISE_FILTER} ({key} spp)"
+    group = bpy.data.node_groups.get(name)
+    if group is not None and group.get("penumbra_version") == NOISE_FILTER_VERSION:
+        return group, None, None
+    if group is not None:   # built by an older Penumbra: materials that use it keep it
+        group.name = name + " (old)"
+    group, gin, gout = new_group(name, [("Vector", "NodeSocketVector", (0.0, 0.0, 0.0)),
+                                        ("Scale", "NodeSocketFloat", 5.0),
+                                        ("Units per World", "NodeSocketFloat", 1.0),
+                                        ("Minor", "NodeSocketFloat", 0.0), ("Major", "NodeSocketFloat", 0.0),
+                                        ("Axis U", "NodeSocketVector", (0.0, 0.0, 0.0)),
+                                        ("Axis V", "NodeSocketVector", (0.0, 0.0, 0.0)),
+                                        ("Samples", "NodeSocketFloat", 1.0),
+                                        ("W", "NodeSocketFloat", 0.0)] +
+                                 ([("Point Minor", "NodeSocketFloat", 0.0), ("Point Major", "NodeSocketFloat", 0.0)]
+                                  if point else []),
+                                 [("Mean", "NodeSocketFloat"), ("Sigma", "NodeSocketFloat"),
+                                  ("Offsets", "NodeSocketVector"), ("Variances", "NodeSocketVector")] +
+                                 ([("Mixture", "NodeSocketFloat")] if point else []))
+    group["penumbra_octave_coefficients"] = list(coefficients)
+    group["penumbra_octave_offset"] = offset
+    group["penumbra_taps"] = taps
+    group["penumbra_point"] = point
+    group["penumbra_analytic_octaves"] = analytic_octaves
+    group["penumbra_native"] = native
+    return group, gin, gout
 
 def _one_evaluation(b, gin, model, table, filter_stddev_px, share, analytic_octaves, native):
     """(mean, sigma) of the one-evaluation filters: the band-limited Noise
