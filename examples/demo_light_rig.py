@@ -260,7 +260,8 @@ def run(out_folder, demo):
         e = static["eevee"]
         made += " in Cycles and EEVEE"
         error += "".join(f"; EEVEE {name} {100 * e[key]['render_relative_rmse']:.1f} % "
-                         f"(mean {e[key]['render_mean_ratio']:.3f})" for key, name in (("world", "World"), ("rig", "rig")))
+                         f"(mean {e[key]['render_mean_ratio']:.3f})"
+                         for key, name in (("world", "World"), ("rig", "rig")))
     demo.step("lights sheet", f"{os.path.basename(sheet_path)}: {made}, {size[0]}×{size[1]}", error,
               static["render_seconds"] + time.perf_counter() - started)
     animated = _animated_rig(scene, hdri, out_folder, settings, demo)
