@@ -45,7 +45,6 @@ def main(out, count, reference_spp, budgets):
     penumbra.register()
     core = native.require()
     scene, strength = sunrise_sphere_scene(16)
-    scene.render.engine = "CYCLES"  # the factory file's engine is EEVEE
     scene.render.threads_mode, scene.render.threads = "FIXED", THREADS
     scene.render.image_settings.file_format = "OPEN_EXR"
     scene.render.image_settings.color_depth = "32"
