@@ -20,7 +20,9 @@ light keeps its place).
 
 Writes docs/lights-benchmark.md, keeping its "Irradiance fit" and "Video"
 sections, which bench/lights_fit_benchmark.py and lights_video_benchmark.py
-write."""
+write, and its "Cycles at equal time" section, which `--equal-time` alone
+writes (issue #26 item 5, bench/blender_scripts/lights_equal_time_render.py:
+the World and a 64-sun rig rendered by Cycles for the same time)."""
 
 import math
 import os
@@ -32,6 +34,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
 from bench import lights_fit_benchmark, lights_video_benchmark  # noqa: E402  (their sections' headings)
 from bench.helpers import test_videos as data  # noqa: E402
+from bench.helpers.doc_section import write_section  # noqa: E402
 from bench.helpers.median_cut import median_cut  # noqa: E402
 from bench.helpers.metrics import rel_rmse  # noqa: E402
 from bench.helpers.paths import ROOT, compiled_core  # noqa: E402
@@ -114,24 +117,107 @@ SHADOW_COUNTS = (16, 64, 256)
 SHADOW_SPP = 128
 
 
-def shadowed_comparison():
-    """Relative RMSE of Cycles renders lit by rigs against the World-lit render."""
+def _bpy_result(script_name, args, what, timeout):
+    """The "RESULT {json}" line of bench/blender_scripts/<script_name> run in
+    the bpy 4.5 module (a fresh process) with a temporary folder and `args`."""
     import json
     import subprocess
     import tempfile
     python = os.path.join(ROOT, ".venv", "bin", "python")
-    script = os.path.join(ROOT, "bench", "blender_scripts", "lights_shadowed_render.py")
-    with tempfile.TemporaryDirectory(prefix="penumbra_lights_shadows_") as tmp:
-        res = subprocess.run([python, script, tmp, ",".join(str(n) for n in SHADOW_COUNTS), str(SHADOW_SPP)],
-                             capture_output=True, text=True, timeout=1200)
+    script = os.path.join(ROOT, "bench", "blender_scripts", script_name)
+    with tempfile.TemporaryDirectory(prefix="penumbra_lights_") as tmp:
+        res = subprocess.run([python, script, tmp, *args], capture_output=True, text=True, timeout=timeout)
         line = [x for x in res.stdout.splitlines() if x.startswith("RESULT ")]
         if res.returncode != 0 or not line:
             print(res.stdout[-3000:], res.stderr[-3000:])
-            raise RuntimeError("the shadowed comparison failed")
+            raise RuntimeError(f"the {what} failed")
         return json.loads(line[0][len("RESULT "):])
 
 
+def shadowed_comparison():
+    """Relative RMSE of Cycles renders lit by rigs against the World-lit render."""
+    return _bpy_result("lights_shadowed_render.py", [",".join(str(n) for n in SHADOW_COUNTS), str(SHADOW_SPP)],
+                       "shadowed comparison", 1200)
+
+
+EQUAL_TIME_SECTION = "## Cycles at equal time (issue #26 item 5)"
+EQUAL_TIME_SUNS = 64
+EQUAL_TIME_REFERENCE_SPP = 1024  # the issue's reference has 2048; 1024 keeps the run near 3 minutes here
+EQUAL_TIME_BUDGETS_SPP = (32, 128)  # the World's samples that set each time budget
+
+
+def equal_time_comparison():
+    """The World and a rig of EQUAL_TIME_SUNS suns at equal Cycles render
+    time (bench/blender_scripts/lights_equal_time_render.py)."""
+    return _bpy_result("lights_equal_time_render.py",
+                       [str(EQUAL_TIME_SUNS), str(EQUAL_TIME_REFERENCE_SPP),
+                        ",".join(str(n) for n in EQUAL_TIME_BUDGETS_SPP)], "equal-time comparison", 1800)
+
+
+def _time_for_world_noise(row, world):
+    """The render time a lighting needs for the World's noise, in units of
+    the World's time (Monte Carlo noise ∝ 1/√time)."""
+    return (row["noise"] / world["noise"]) ** 2 * row["seconds"] / world["seconds"]
+
+
+def equal_time_section(result, seconds):
+    """The section's lines: per budget, each lighting's samples, time and
+    error against the reference, and the time the rig needs for the World's
+    noise (noise ∝ 1/√time)."""
+    world_reference_noise = result["budgets"][-1]["rows"]["World"]["noise"] * math.sqrt(
+        result["budgets"][-1]["budget_spp"] / result["reference_spp"])
+    lines = [EQUAL_TIME_SECTION, "",
+             f"Written by `bench/lights_benchmark.py --equal-time` ({time.strftime('%Y-%m-%d')}, {seconds:.0f} s, "
+             f"load {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores). The scene of the shadowed comparison "
+             f"(sunrise.exr, a sphere on a plane, 128x96, Cycles on the CPU, no denoising, bpy 4.5) on "
+             f"{result['threads']} threads, lit by the World and by the default rig of {result['count']} suns "
+             "(built for Cycles, World strength 0), the rig with Blender's light tree on (the factory setting) "
+             "and off. Each lighting's render time was fitted as a + b·spp from renders of 8 and 64 samples "
+             "after a warm-up; each budget is the World's time at the samples named, and each lighting renders "
+             "with the samples that fill it, with two seeds. Time is the render's CPU seconds (all threads of "
+             "the process): on this shared machine wall seconds measure the other jobs' load (they are given "
+             "too). "
+             f"Error = RMS of the luminance difference to a World render of {result['reference_spp']} samples "
+             f"(not the issue's 2048, for time; its own noise is about {100 * world_reference_noise:.1f} %, "
+             "included in every error) / its mean, the mean of the two seeds; noise = one render's own (the "
+             "two seeds' RMS difference / √2); mean = mean luminance / the reference's. `time for the World's "
+             "noise` = (noise / the World's noise)² × CPU s / the World's CPU s: the time this lighting needs "
+             "to be as clean as the World is in the budget, in the World's times.", "",
+             "| budget (World spp) | lit by | spp | CPU s | wall s | error | noise | mean | time for the World's "
+             "noise |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for budget in result["budgets"]:
+        world = budget["rows"]["World"]
+        for kind, row in budget["rows"].items():
+            needed = _time_for_world_noise(row, world)
+            lines.append(f"| {budget['budget_spp']} ({budget['budget_seconds']:.1f} CPU s) | {kind} | {row['spp']} "
+                         f"| {row['seconds']:.1f} | {row['wall_seconds']:.1f} | {100 * row['error']:.2f}% "
+                         f"| {100 * row['noise']:.2f}% | {row['mean']:.3f} | {needed:.1f}× |")
+    last = result["budgets"][-1]["rows"]
+    tree_on, tree_off = (last[k]["noise"] / last["World"]["noise"] for k in ("rig, light tree on",
+                                                                             "rig, light tree off"))
+    time_on, time_off = (_time_for_world_noise(last[k], last["World"]) for k in ("rig, light tree on",
+                                                                                 "rig, light tree off"))
+    verdict = "pays in noise" if min(time_on, time_off) > 1.0 else "gains in noise"
+    lines += ["", f"What a user {verdict}, in Cycles: at equal time the {result['count']}-sun rig is "
+              f"{tree_on:.1f}× as noisy as the World with the light tree and {tree_off:.1f}× without it "
+              f"(largest budget), so it needs {time_on:.1f}× (light tree) or {time_off:.1f}× the "
+              "World's render time for the World's noise. Cycles importance-samples the World map itself, "
+              "where each sun of the rig is one more light to choose and to trace a shadow ray to. The rig "
+              "is for what cannot sample the map (EEVEE's shadows, game engines through the JSON) and for "
+              "lights edited one by one, not a faster Cycles render.", ""]
+    return lines
+
+
 def main():
+    if "--equal-time" in sys.argv[1:]:
+        started = time.time()
+        result = equal_time_comparison()
+        print("equal time:", result, flush=True)
+        path = os.path.join(ROOT, "docs", "lights-benchmark.md")
+        write_section(path, EQUAL_TIME_SECTION, "\n" + "\n".join(equal_time_section(result, time.time() - started)),
+                      "## Shadowed comparison (EEVEE)")
+        print(f"wrote {path}")
+        return
     started = time.time()
     shadows = shadowed_comparison()
     print("shadowed comparison:", shadows, flush=True)
@@ -214,7 +300,7 @@ def main():
     # The fit's and the video's sections are their own scripts' (make bench
     # runs them after this one); kept as they are.
     old = open(path).read() if os.path.exists(path) else ""
-    for heading in (lights_fit_benchmark.SECTION, lights_video_benchmark.SECTION):
+    for heading in (EQUAL_TIME_SECTION, lights_fit_benchmark.SECTION, lights_video_benchmark.SECTION):
         if heading in old:
             rest = old.split(heading, 1)[1]
             lines += ["", heading + (rest[:rest.find("\n## ")] if "\n## " in rest else rest).rstrip("\n")]

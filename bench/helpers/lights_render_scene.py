@@ -28,6 +28,9 @@ def sunrise_sphere_scene(cycles_samples, eevee_samples=None):
     scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 128, 96, 100
     scene.render.film_transparent = True  # black background: only the lit scene is compared
     scene.view_settings.view_transform = "Standard"
+    # The factory file's engine is EEVEE from 4.2 on (lost in 0fe84f2: the
+    # shadowed comparison rendered EEVEE since).
+    scene.render.engine = "CYCLES"
     scene.cycles.device, scene.cycles.samples, scene.cycles.use_denoising = "CPU", cycles_samples, False
     if eevee_samples is not None:
         scene.eevee.taa_render_samples = eevee_samples
