@@ -61,6 +61,17 @@ def baked_quality(filter_node):
     return filter_node.get(NODE_PROPERTY, LEGACY)
 
 
+def rebake_reason(filter_nodes, chosen):
+    """What the panel says when a material's Noise Filters were baked at
+    another preset than `chosen` (a material from before the presets counts
+    as LEGACY: it keeps rendering with its old groups until baked again):
+    "Baked at <label>", or None."""
+    baked = [baked_quality(n) for n in filter_nodes]
+    if not any(key != chosen for key in baked):
+        return None
+    return f"Baked at {QUALITIES.get(baked[0], QUALITIES[LEGACY]).label}"
+
+
 def measured():
     """{preset: {"cost": per-sample time / plain ramp's, "ratio": equal-time
     RMSE / plain ramp's (16 spp), "scenes": ...}} from filter_quality.json,

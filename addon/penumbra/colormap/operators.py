@@ -16,7 +16,7 @@ import numpy as np
 
 from . import filter_quality, filtered_ramp, footprint, native_filter, noise_filter, noise_maths, noise_model
 from . import noise_statistics
-from . import node_groups, point_footprint, ramp as ramp_io, sample_count
+from . import node_groups, point_footprint, ramp as ramp_io, sample_count, table_image
 from .material import BakeError, Rollback, editable_material
 from .surface_filter import filters_of
 from .. import color, modal_job, native, node_links, world
@@ -257,6 +257,7 @@ class BakePlan:
                 break
         if image is None:
             image = bpy.data.images.load(path, check_existing=False)
+            table_image.relative_to_blend(image)
         image.colorspace_settings.name = "Non-Color"  # no colour transform on load
         image.alpha_mode = "CHANNEL_PACKED"
         return image, path

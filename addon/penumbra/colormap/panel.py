@@ -83,13 +83,13 @@ class PENUMBRA_PT_colormap_quality(_SubPanel, bpy.types.Panel):
             split.label(text=("› " if key == s.filter_quality else "") + quality.label)
             split.label(text=f"{numbers['cost']:.2g}× {numbers['ratio']:.2f}" if numbers else "–")
         material = active_material(context)
-        baked = [filter_quality.baked_quality(n) for n in sample_count.noise_filter_nodes(material)] \
+        nodes = sample_count.noise_filter_nodes(material) \
             if material is not None and material.node_tree is not None else []
-        if any(key != s.filter_quality for key in baked):
+        reason = filter_quality.rebake_reason(nodes, s.filter_quality)
+        if reason:
             box = layout.box()
             box.alert = True
-            name = filter_quality.QUALITIES.get(baked[0], filter_quality.QUALITIES[filter_quality.LEGACY]).label
-            box.label(text=f"Baked at {name}", icon="ERROR")
+            box.label(text=reason, icon="ERROR")
             box.label(text="Restore, bake again to apply")
 
 

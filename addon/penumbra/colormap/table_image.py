@@ -12,6 +12,18 @@ def default_folder():
     return os.path.join(bpy.app.tempdir or tempfile.gettempdir(), "penumbra_luts")
 
 
+def relative_to_blend(image):
+    """Stores `image`'s path relative to the saved .blend ("//..."), as
+    Blender's file browser does by default, so a project folder moved or
+    copied with its lookups keeps them. An unsaved file keeps the absolute
+    path (Blender remaps it when the file is first saved)."""
+    if bpy.data.filepath and not image.filepath.startswith("//"):
+        try:
+            image.filepath = bpy.path.relpath(image.filepath)
+        except ValueError:   # another drive (Windows): no relative path exists
+            pass
+
+
 def table_image(name, pixels, folder=None):
     """A small float table (rows bottom-up as Blender stores them) written as
     EXR by the core and loaded 'Non-Color', so it survives saving the .blend
@@ -30,6 +42,7 @@ def table_image(name, pixels, folder=None):
             image.name = name + " (old)"
         image = bpy.data.images.load(path, check_existing=False)
         image.name = name
+        relative_to_blend(image)
     image.colorspace_settings.name = "Non-Color"
     image.alpha_mode = "CHANNEL_PACKED"
     return image

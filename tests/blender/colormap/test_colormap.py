@@ -3,6 +3,7 @@ Blender's own, the bake operator end to end (undo, failures, bad input, an
 image as the map), and the node groups in this Blender's node-group API."""
 
 import os
+import shutil
 
 import bpy
 import numpy as np
@@ -107,6 +108,28 @@ def test_bake_replaces_a_noise_driven_ramp_and_keeps_the_original(addon, tmp_pat
     assert bpy.ops.penumbra.restore_color_ramp() == {"FINISHED"}
     assert not ramp.mute and bsdf.inputs["Base Color"].links[0].from_node == ramp
     assert not [n.name for n in tree.nodes if n.name.startswith("Penumbra")]
+
+
+def test_a_saved_files_lookups_are_stored_relative_and_follow_the_moved_folder(addon, tmp_path):
+    """A project folder moved or copied with its lookups keeps them (0.2.0
+    stored absolute paths, which broke in the copy)."""
+    project = tmp_path / "project"
+    project.mkdir()
+    bpy.ops.wm.save_as_mainfile(filepath=str(project / "shot.blend"))
+    addon.penumbra.colormap.output_folder = "//lookups/"
+    addon.penumbra.colormap.lut_width = addon.penumbra.colormap.lut_height = 16
+    material, _ = make_ramp_material(name="moved", noise=True)
+    plane_with(material)
+    assert bpy.ops.penumbra.bake_colormap_lut() == {"FINISHED"}
+    lookups = [i for i in bpy.data.images if i.filepath]
+    assert len(lookups) >= 2 and all(i.filepath.startswith("//lookups/") for i in lookups), \
+        [i.filepath for i in lookups]
+    bpy.ops.wm.save_mainfile()
+    shutil.move(str(project), str(tmp_path / "moved"))
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "moved" / "shot.blend"))
+    for image in (i for i in bpy.data.images if i.filepath):
+        assert os.path.exists(bpy.path.abspath(image.filepath)), image.filepath
+        assert len(image.pixels) > 0, image.filepath   # loads it: a missing file has none
 
 
 def test_bake_is_undone_and_redone_by_blenders_undo(addon, tmp_path):

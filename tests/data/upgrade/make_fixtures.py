@@ -128,6 +128,9 @@ def main():
     default = bpy.data.scenes.get("Scene")
     if default is not None and len(bpy.data.scenes) > 1:
         bpy.data.scenes.remove(default)
+    # 0.2.0 loads its lookups by absolute path: made relative here, or the
+    # fixture would only open where it was written.
+    bpy.ops.file.make_paths_relative()
     bpy.ops.wm.save_as_mainfile(filepath=blend, relative_remap=True, compress=True)
     np.savez_compressed(os.path.join(out, "reference.npz"), **reference)
     with open(os.path.join(out, "fixture.json"), "w") as f:
