@@ -1,5 +1,6 @@
 """The procedural character, its bake and its attributes, shared by the visibility tests."""
 
+import math
 import os
 import sys
 
@@ -41,3 +42,14 @@ def uniform_world(scene, rgb=(1.0, 1.0, 1.0), strength=1.0):
     background.inputs["Strength"].default_value = strength
     scene.world = world
     return world
+
+
+def front_camera(scene):
+    """The scene's camera, 7 m in front of the character at chest height,
+    looking at it."""
+    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    scene.collection.objects.link(camera)
+    scene.camera = camera
+    camera.location = (0.0, -7.0, 1.4)
+    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
+    return camera

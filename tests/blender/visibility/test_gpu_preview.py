@@ -23,6 +23,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
 sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
 import visibility_character  # noqa: E402
+from visibility_character_scenes import front_camera  # noqa: E402
 
 
 def attributes(obj):
@@ -70,11 +71,7 @@ def test_gpu_preview_is_a_scene_setting_that_starts_off(addon):
 def test_turning_the_preview_on_without_a_gpu_says_so_and_changes_no_attribute_or_render(addon, tmp_path):
     obj = baked_character(addon, tmp_path)
     assert bpy.ops.penumbra.setup_material() == {"FINISHED"}
-    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    addon.collection.objects.link(camera)
-    addon.camera = camera
-    camera.location = (0.0, -7.0, 1.4)
-    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
+    front_camera(addon)
     before = {}
     for frame in (4, 10):
         addon.frame_set(frame)

@@ -22,7 +22,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.a
 sys.path.insert(0, os.path.join(ROOT, "examples", "scenes"))
 import visibility_character  # noqa: E402
 
-from visibility_character_scenes import attribute, bake_op, character, uniform_world  # noqa: E402
+from visibility_character_scenes import attribute, bake_op, character, front_camera, uniform_world  # noqa: E402
 
 # Held-out error allowed (mean |Δ AO| over vertices and held-out frames); see
 # docs/visibility.md ("Accuracy threshold"). An absolute ceiling only: a
@@ -320,11 +320,7 @@ def test_setup_material_shows_the_shading_in_a_cycles_render(addon, tmp_path):
     node = material.node_tree.nodes["Penumbra Shading"]
     assert node.attribute_name == "penumbra_shading"
     assert node.outputs["Color"].is_linked
-    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    addon.collection.objects.link(camera)
-    addon.camera = camera
-    camera.location = (0.0, -7.0, 1.4)
-    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
+    front_camera(addon)
     addon.world = None  # black background, so only the emission shows
     addon.render.engine = "CYCLES"
     addon.cycles.samples = 1
@@ -359,11 +355,7 @@ def test_with_live_update_off_a_render_still_gets_each_frames_attributes(addon, 
     assert bake_op(tmp_path) == {"FINISHED"}
     assert bpy.ops.penumbra.apply_visibility() == {"FINISHED"}
     assert bpy.ops.penumbra.setup_material() == {"FINISHED"}
-    camera = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    addon.collection.objects.link(camera)
-    addon.camera = camera
-    camera.location = (0.0, -7.0, 1.4)
-    camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
+    front_camera(addon)
     addon.render.engine = "CYCLES"  # the World stays: the shading is lit by it
     addon.cycles.samples = 1
     addon.cycles.use_denoising = False
