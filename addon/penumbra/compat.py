@@ -10,6 +10,11 @@ import bpy
 # raises a DeprecationWarning (5.0 Python API release notes, "Shading":
 # blender/blender PR #141278 for materials, #142342 for worlds). A new
 # material or world already has its node tree.
+# Path properties that take a path relative to the .blend ("//..."): 5.x
+# warns when one without this option is given such a path; 4.5 has the
+# option, 3.4 refuses it (its properties have no such flag).
+BLEND_RELATIVE_PATH = ({"PATH_SUPPORTS_BLEND_RELATIVE"}
+                       if "is_path_supports_blend_relative" in bpy.types.Property.bl_rna.properties else set())
 ALWAYS_USES_NODES = bpy.app.version >= (5, 0, 0)
 
 

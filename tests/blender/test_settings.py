@@ -103,3 +103,27 @@ def test_the_sh_order_stops_at_the_visibility_tools_limit_not_the_sh_engines(spe
     assert spec["visibility.sh_order"]["max"] == limit
     for where in ("object.visibility", "operator.bake_visibility"):
         assert rna_property(where, "sh_order").hard_max == limit
+
+
+def _path_properties():
+    """(owner, name, rna property) of every file or folder path among the
+    add-on's settings and operator properties."""
+    owners = [(cls.__name__, cls.bl_rna) for cls in bpy.types.PropertyGroup.__subclasses__()
+              if cls.__module__.startswith("penumbra")]
+    owners += [(f"penumbra.{name}", getattr(bpy.ops.penumbra, name).get_rna_type()) for name in dir(bpy.ops.penumbra)]
+    return [(owner, p.identifier, p) for owner, rna in owners for p in rna.properties
+            if p.type == "STRING" and p.subtype in {"FILE_PATH", "DIR_PATH"}]
+
+
+def test_every_path_property_takes_a_path_relative_to_the_blend(spec):
+    """Penumbra names files "//..." (its defaults, a saved .blend's
+    settings); Blender 5.x warns on every such assignment to a path property
+    without PATH_SUPPORTS_BLEND_RELATIVE. Blender 3.4's RNA does not expose
+    the flag: there the list of path properties is checked alone."""
+    found = _path_properties()
+    names = {f"{owner}.{name}" for owner, name, _ in found}
+    assert {"LightRigSceneSettings.filepath", "LightRigSceneSettings.json_path", "ColormapSceneSettings.output_folder",
+            "VisibilityObjectSettings.model_path", "penumbra.build_light_rig.filepath",
+            "penumbra.bake_visibility.filepath"} <= names, names
+    if hasattr(found[0][2], "is_path_supports_blend_relative"):
+        assert [f"{owner}.{n}" for owner, n, p in found if not p.is_path_supports_blend_relative] == []

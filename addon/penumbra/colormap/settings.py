@@ -1,6 +1,7 @@
 """Colour-map lookup settings stored in the .blend (scene.penumbra.colormap)."""
 
 import bpy
+from .. import compat
 from ..core_settings import limits
 from . import filter_quality
 
@@ -33,7 +34,7 @@ class ColormapSceneSettings(bpy.types.PropertyGroup):
     mean_max: bpy.props.FloatProperty(name="Mean Max", **limits("colormap.mean_max"),
                                       description="Largest driving mean in the lookup")
     output_folder: bpy.props.StringProperty(
-        name="Folder", default="//penumbra_luts/", subtype="DIR_PATH",
+        name="Folder", default="//penumbra_luts/", subtype="DIR_PATH", options=compat.BLEND_RELATIVE_PATH,
         description="Where lookup images are written (next to the .blend by default; the temporary "
                     "folder while the file is unsaved)")
     filter_quality: bpy.props.EnumProperty(

@@ -14,7 +14,7 @@ import tempfile
 import bpy
 import numpy as np
 
-from .. import color, modal_job, native, world
+from .. import color, compat, modal_job, native, world
 from . import rig_objects, settings
 from ..core_settings import limits
 
@@ -270,7 +270,8 @@ class PENUMBRA_OT_build_light_rig(modal_job.JobOperator, bpy.types.Operator):
     bl_label = "Build Light Rig"
     bl_options = {"REGISTER", "UNDO"}
 
-    filepath: bpy.props.StringProperty(name="Source", subtype="FILE_PATH", default="")
+    filepath: bpy.props.StringProperty(name="Source", subtype="FILE_PATH", default="",
+                                       options=compat.BLEND_RELATIVE_PATH)
     mapping: bpy.props.EnumProperty(name="Mapping", items=settings.MAPPING_ITEMS, default="EQUIRECTANGULAR")
     colorspace: bpy.props.StringProperty(name="Colour Space", default="")
     count: bpy.props.IntProperty(name="Lights", **limits("lights.count"))

@@ -3,6 +3,7 @@ operator penumbra.build_light_rig takes its defaults from here when run from
 the panel; a script can pass every setting to the operator directly."""
 
 import bpy
+from .. import compat
 from ..core_settings import limits
 
 MAPPING_ITEMS = (
@@ -37,7 +38,7 @@ POWER_ITEMS = (
 
 class LightRigSceneSettings(bpy.types.PropertyGroup):
     filepath: bpy.props.StringProperty(
-        name="Source", subtype="FILE_PATH",
+        name="Source", subtype="FILE_PATH", options=compat.BLEND_RELATIVE_PATH,
         description="HDR image, first frame of a numbered sequence, or video; empty uses the World's environment texture")
     mapping: bpy.props.EnumProperty(name="Mapping", items=MAPPING_ITEMS, default="EQUIRECTANGULAR")
     colorspace: bpy.props.StringProperty(
@@ -80,6 +81,7 @@ class LightRigSceneSettings(bpy.types.PropertyGroup):
         name="Target Renderer", items=TARGET_RENDERER_ITEMS, default="SCENE",
         description="The renderer the suns are fitted for (docs/lights.md, \"Suns in EEVEE\")")
     json_path: bpy.props.StringProperty(name="JSON", default="//penumbra_light_rig.json", subtype="FILE_PATH",
+                                        options=compat.BLEND_RELATIVE_PATH,
                                         description="Per-frame lights for game engines, written beside the .blend")
     collection: bpy.props.PointerProperty(type=bpy.types.Collection, name="Rig Collection")
     last_report: bpy.props.StringProperty(name="Last Build", default="")

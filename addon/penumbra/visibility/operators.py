@@ -9,7 +9,7 @@ import time
 
 import bpy
 
-from .. import modal_job
+from .. import compat, modal_job
 from ..core_settings import limits
 from ..errors import CORE_ERRORS, describe
 from .bake import BakeJob, fit_model, resolve_path, store_result, summary_of
@@ -37,7 +37,7 @@ class PENUMBRA_OT_bake_visibility(modal_job.JobOperator, bpy.types.Operator):
     sh_order: bpy.props.IntProperty(name="SH Order", **limits("visibility.sh_order"))
     occluders: bpy.props.StringProperty(name="Occluders", default="",
                                         description="Collection of other shadowing objects (empty: the object's setting)")
-    filepath: bpy.props.StringProperty(name="File", subtype="FILE_PATH", default="",
+    filepath: bpy.props.StringProperty(name="File", subtype="FILE_PATH", default="", options=compat.BLEND_RELATIVE_PATH,
                                        description="Model file (empty: the object's setting, else next to the .blend)")
     actions: bpy.props.StringProperty(
         name="Actions", default="",

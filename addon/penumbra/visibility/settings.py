@@ -5,6 +5,7 @@ how to shade it, and the report of the last bake. Per scene
 (`scene.penumbra.visibility`): run-time options shared by every object."""
 
 import bpy
+from .. import compat
 from ..core_settings import limits
 
 
@@ -48,7 +49,7 @@ class VisibilityObjectSettings(bpy.types.PropertyGroup):
                                     description="Spherical-harmonic order (bands) of the visibility")
     occluders: bpy.props.PointerProperty(name="Occluders", type=bpy.types.Collection,
                                          description="Other objects that shadow this mesh (optional)")
-    filepath: bpy.props.StringProperty(name="Model File", subtype="FILE_PATH", default="",
+    filepath: bpy.props.StringProperty(name="Model File", subtype="FILE_PATH", default="", options=compat.BLEND_RELATIVE_PATH,
                                        description="Where the model is written (empty: next to the .blend)")
     # Run time
     enabled: bpy.props.BoolProperty(name="Enable", default=False, update=_refresh,
@@ -63,7 +64,8 @@ class VisibilityObjectSettings(bpy.types.PropertyGroup):
     transmission: bpy.props.FloatVectorProperty(name="Transmission", subtype="COLOR", size=3, min=0.0,
                                                 **limits("visibility.transmission"), update=_refresh)
     # Result of the last bake, saved with the .blend
-    model_path: bpy.props.StringProperty(name="Model", subtype="FILE_PATH", default="")
+    model_path: bpy.props.StringProperty(name="Model", subtype="FILE_PATH", default="",
+                                         options=compat.BLEND_RELATIVE_PATH)
     report: bpy.props.StringProperty(name="Report", default="", description="JSON summary of the last bake")
     status: bpy.props.StringProperty(name="Status", default="", description="Last run-time problem, if any")
 
