@@ -21,6 +21,10 @@ import demo_render  # noqa: E402  (examples/demo_render.py)
 DIFFERENCE_SCALE = 0.25  # |Δ| (mean over RGB) at the bright end of the heat ramp
 
 
+EQUAL_TIME_SPP = 16   # the filtered render set beside the plain ramp at equal time
+MAX_PLAIN_SPP = 4096
+
+
 def _settings(quick):
     if quick:
         return {"size": (288, 162), "crop": (108, 43, 180, 84), "enlarge": 6, "reference_spp": 64}
@@ -87,24 +91,72 @@ def run(out_folder, demo):
     group = material.node_tree.nodes["Penumbra Filtered Ramp"]
     demo.step("colour-map lookup", group.node_tree["penumbra_lookup"]["image"], "", bake_s)
     filtered, filtered_s = _render(scene, out_folder, "penumbra_1spp", 1)
+    filtered16, filtered16_s = _render(scene, out_folder, f"penumbra_{EQUAL_TIME_SPP}spp", EQUAL_TIME_SPP)
+
+    # The plain ramp rendered for the filtered render's time: a user pays for
+    # seconds, not samples (issue #25). Its sample count comes from the plain
+    # renders' own seconds (a fixed cost plus a cost per sample).
+    with_filter = _disconnect_filter(material)
+    plain_spp = _plain_spp_for(filtered16_s, (1, plain1_s), (16, plain16_s))
+    plain_eq, plain_eq_s = _render(scene, out_folder, f"plain_ramp_{plain_spp}spp", plain_spp)
+    if not 0.8 < plain_eq_s / filtered16_s < 1.25:   # once more, from the nearer measurement
+        plain_spp = _plain_spp_for(filtered16_s, (16, plain16_s), (plain_spp, plain_eq_s))
+        plain_eq, plain_eq_s = _render(scene, out_folder, f"plain_ramp_{plain_spp}spp", plain_spp)
+    with_filter()
 
     results = []
     for name, image, spp, seconds in (("plain ramp", plain1, 1, plain1_s), ("plain ramp", plain16, 16, plain16_s),
-                                      ("Penumbra filtered ramp", filtered, 1, filtered_s)):
+                                      ("Penumbra filtered ramp", filtered, 1, filtered_s),
+                                      ("Penumbra filtered ramp", filtered16, EQUAL_TIME_SPP, filtered16_s),
+                                      ("plain ramp", plain_eq, plain_spp, plain_eq_s)):
         part = _crop(image, crop)
         results.append({"method": name, "spp": spp, "seconds": round(seconds, 3), "picture": part,
                         "rmse": float(np.sqrt(((part - reference) ** 2).mean()))})
+    equal_time = {"filtered": {k: results[3][k] for k in ("spp", "seconds", "rmse")},
+                  "plain": {k: results[4][k] for k in ("spp", "seconds", "rmse")}}
     started = time.perf_counter()
     sheet_path, size = _sheet(settings, reference, results, plain1, filtered, demo)
     rmse = {f"{r['method']} {r['spp']} spp": r["rmse"] for r in results}
-    demo.step("colour-map sheet", f"{os.path.basename(sheet_path)}: 3 crops, {size[0]}×{size[1]}",
-              f"RMSE {results[0]['rmse']:.3f} plain → {results[2]['rmse']:.3f} Penumbra, 1 spp",
-              plain_seconds + filtered_s + time.perf_counter() - started)
+    f, p = equal_time["filtered"], equal_time["plain"]
+    demo.step("colour-map sheet", f"{os.path.basename(sheet_path)}: {len(results)} crops, {size[0]}×{size[1]}",
+              f"equal time: RMSE {p['rmse']:.3f} plain ({p['spp']} spp, {p['seconds']:.2f} s) vs "
+              f"{f['rmse']:.3f} Penumbra ({f['spp']} spp, {f['seconds']:.2f} s)",
+              plain_seconds + filtered_s + filtered16_s + plain_eq_s + time.perf_counter() - started)
     for r in results:
         r.pop("picture")
     return {"bake_seconds": round(bake_s, 3), "reference_spp": settings["reference_spp"],
             "reference_seconds": round(reference_s, 3), "crop": list(crop), "rmse": rmse, "renders": results,
-            "sheet": sheet_path}
+            "equal_time": equal_time, "sheet": sheet_path}
+
+
+def _plain_spp_for(seconds, low, high):
+    """The plain ramp's sample count whose render takes `seconds`, from two
+    of its renders (spp, seconds) on a line; at least 1."""
+    (s0, t0), (s1, t1) = sorted([low, high])
+    per_sample = (t1 - t0) / (s1 - s0) if s1 != s0 else 0.0
+    if per_sample <= 0.0:   # timing noise: no fixed cost then
+        per_sample = t1 / s1
+    return min(MAX_PLAIN_SPP, max(1, int(round(s1 + (seconds - t1) / per_sample))))
+
+
+def _disconnect_filter(material):
+    """Shows the plain ramp again (the bake muted it and routed its output
+    through the filter); returns the function that puts the filter back."""
+    tree = material.node_tree
+    group = tree.nodes["Penumbra Filtered Ramp"]
+    ramp = tree.nodes[group["penumbra_original_ramp"]]
+    targets = {name: [link.to_socket for link in group.outputs[name].links] for name in ("Color", "Alpha")}
+    ramp.mute = False
+    for name, sockets in targets.items():
+        for socket in sockets:
+            tree.links.new(ramp.outputs[name], socket)
+
+    def restore():
+        ramp.mute = True
+        for name, sockets in targets.items():
+            for socket in sockets:
+                tree.links.new(group.outputs[name], socket)
+    return restore
 
 
 def _sheet(settings, reference, results, plain1, filtered, demo):
@@ -126,6 +178,7 @@ def _sheet(settings, reference, results, plain1, filtered, demo):
                    cs.Tile(cs.enlarge(demo_render.display(r["picture"]), k), [f"{r['method']}, {r['spp']} spp"]),
                    cs.Tile(cs.enlarge(cs.heat(difference, DIFFERENCE_SCALE), k),
                            [f"|difference|, 0 - {DIFFERENCE_SCALE:g}"])],
-                  f"{r['method']} at {r['spp']} spp: RMSE {r['rmse']:.4f}")
+                  f"{r['method']} at {r['spp']} spp, {r['seconds']:.2f} s: RMSE {r['rmse']:.4f}"
+                  + (" (equal time)" if r is results[-1] or r is results[-2] else ""))
     path = demo.sheet_path("colormap")
     return path, sheet.write(path)

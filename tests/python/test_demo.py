@@ -105,9 +105,15 @@ def test_demo_errors_say_what_the_readme_says(quick_demo):
         # gpu.init(). Measured in quick mode (4 samples): World 15.8 %, mean
         # 0.961; the rig built for EEVEE 17.7 %, mean 0.893 (no bounce light).
         assert ("eevee" in lights) == (name == "bpy-5.2"), name
+        rmse = summary["colormap"]["rmse"]
+        assert rmse["Penumbra filtered ramp 1 spp"] < 0.5 * rmse["plain ramp 1 spp"], name
+        # The sheet sets the filtered ramp beside the plain ramp rendered for
+        # the same time (issue #25): a sample count whose render took about as
+        # long, with both errors printed (who wins is the benchmark's to say).
+        equal = summary["colormap"]["equal_time"]
+        assert equal["plain"]["spp"] > equal["filtered"]["spp"], (name, equal)
+        assert 0.5 < equal["plain"]["seconds"] / equal["filtered"]["seconds"] < 2.0, (name, equal)
     eevee = summaries["bpy-5.2"]["light_rig"]["static"]["eevee"]
     for lit_by in ("world", "rig"):
         assert eevee[lit_by]["render_relative_rmse"] < 0.3, lit_by
         assert 0.85 < eevee[lit_by]["render_mean_ratio"] < 1.05, lit_by
-        rmse = summary["colormap"]["rmse"]
-        assert rmse["Penumbra filtered ramp 1 spp"] < 0.5 * rmse["plain ramp 1 spp"], name
