@@ -22,6 +22,21 @@ def new_plane_scene(size, threads=2, **plane_options):
     """Factory settings, Cycles on the CPU (no denoising, no adaptive
     sampling), the benchmark plane (colormap_scene.noise_ramp_plane,
     Roughness 0.5 unless given) at `size`. Returns (scene, plane, material)."""
+    plane_options.setdefault("roughness", 0.5)
+    return _cycles_scene(size, threads, "noise_ramp_plane", plane_options)
+
+
+def new_bench_scene(name, scale, threads=2):
+    """The benchmark scene `name` of colormap_render.SCENES (its builder,
+    options and resolution factor on 192×108 times `scale`), set up as
+    new_plane_scene. Returns (scene, object, material)."""
+    from bench.blender_scripts.colormap_render import BASE_SIZE, SCENES
+    builder, options, factor, _ = SCENES[name]
+    size = tuple(max(4, round(v * factor * scale)) for v in BASE_SIZE)
+    return _cycles_scene(size, threads, builder, dict(options))
+
+
+def _cycles_scene(size, threads, builder, options):
     from bench.helpers.paths import use_addon
     use_addon()                 # examples/scenes: colormap_scene
     import colormap_scene
@@ -36,9 +51,8 @@ def new_plane_scene(size, threads=2, **plane_options):
     scene.cycles.use_denoising = False
     scene.cycles.use_adaptive_sampling = False
     scene.cycles.use_animated_seed = False
-    plane_options.setdefault("roughness", 0.5)
-    plane, material, _ramp, _emission, _camera = colormap_scene.noise_ramp_plane(**plane_options)
-    return scene, plane, material
+    obj, material, _ramp, _emission, _camera = getattr(colormap_scene, builder)(**options)
+    return scene, obj, material
 
 
 def bake_quality(scene, plane, material, quality, folder):
@@ -85,16 +99,18 @@ class Renderer:
         return image, wall, cpu
 
 
-def rmse(image, reference):
-    return float(np.sqrt(((image[..., :3] - reference[..., :3]) ** 2).mean()))
+def rmse(image, reference, mask=None):
+    squared = (image[..., :3] - reference[..., :3]) ** 2
+    return float(np.sqrt(squared.mean() if mask is None else squared[mask].mean()))
 
 
-def sweep(renderer, reference, counts, repeats=3, seed0=0):
+def sweep(renderer, reference, counts, repeats=3, seed0=0, mask=None):
     """{method: {spp: {"rmse", "rmse_sd", "wall", "cpu"}}} for counts
     {method: [spp, ...]}: after one warm-up render per method, for each
     repeat every (method, spp) in turn (interleaved), seed seed0 + repeat;
     times are medians, errors the mean (and standard deviation) over the
-    repeats' seeds."""
+    repeats' seeds. With a pixel `mask` (colormap_render.interior_mask),
+    also "rmse_interior" and "rmse_interior_sd" over those pixels."""
     for method in counts:
         renderer.render(method, 1, seed0)
     raw = {(m, s): [] for m, spps in counts.items() for s in spps}
@@ -102,22 +118,27 @@ def sweep(renderer, reference, counts, repeats=3, seed0=0):
         for method, spps in counts.items():
             for spp in spps:
                 image, wall, cpu = renderer.render(method, spp, seed0 + repeat)
-                raw[(method, spp)].append((rmse(image, reference), wall, cpu))
+                inner = rmse(image, reference, mask) if mask is not None else float("nan")
+                raw[(method, spp)].append((rmse(image, reference), wall, cpu, inner))
     out = {m: {} for m in counts}
     for (method, spp), rows in raw.items():
-        errors = [r[0] for r in rows]
-        out[method][spp] = {"rmse": statistics.fmean(errors),
-                            "rmse_sd": statistics.stdev(errors) if len(errors) > 1 else 0.0,
-                            "wall": statistics.median(r[1] for r in rows),
+        out[method][spp] = {"wall": statistics.median(r[1] for r in rows),
                             "cpu": statistics.median(r[2] for r in rows)}
+        for key, column in (("rmse", 0), ("rmse_interior", 3)):
+            if key == "rmse_interior" and mask is None:
+                continue
+            errors = [r[column] for r in rows]
+            out[method][spp][key] = statistics.fmean(errors)
+            out[method][spp][key + "_sd"] = statistics.stdev(errors) if len(errors) > 1 else 0.0
     return out
 
 
-def plain_error_at(plain, seconds, clock):
-    """The plain ramp's RMSE at `seconds` of `clock` ("wall" or "cpu"), read
-    log-log off its curve {spp: entry} (linear between its points in log
-    time and log error, clamped at its ends)."""
-    points = sorted((max(e[clock], 1e-9), e["rmse"]) for e in plain.values())
+def plain_error_at(plain, seconds, clock, error="rmse"):
+    """The plain ramp's RMSE (`error`: "rmse" or "rmse_interior") at
+    `seconds` of `clock` ("wall" or "cpu"), read log-log off its curve
+    {spp: entry} (linear between its points in log time and log error,
+    clamped at its ends)."""
+    points = sorted((max(e[clock], 1e-9), e[error]) for e in plain.values())
     times = [math.log(t) for t, _ in points]
     errors = [math.log(r) for _, r in points]
     x = math.log(max(seconds, 1e-9))
@@ -126,10 +147,10 @@ def plain_error_at(plain, seconds, clock):
     return float(math.exp(np.interp(x, times, errors)))
 
 
-def equal_time_ratios(results, method, clock):
-    """{spp: RMSE of `method` / the plain ramp's at the same time}."""
+def equal_time_ratios(results, method, clock, error="rmse"):
+    """{spp: RMSE (`error`) of `method` / the plain ramp's at the same time}."""
     plain = results[PLAIN]
-    return {spp: e["rmse"] / plain_error_at(plain, e[clock], clock) for spp, e in results[method].items()}
+    return {spp: e[error] / plain_error_at(plain, e[clock], clock, error) for spp, e in results[method].items()}
 
 
 def reference_image(renderer, spp, seed=1000):

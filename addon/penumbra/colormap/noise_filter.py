@@ -20,6 +20,9 @@ from .noise_maths import MIXTURE_COMPONENTS, TAP_COUNT, TAP_COUNTS, major_taps
 # 3: taps outermost, within Cycles' SVM stack; 4: kernels at the sample, no
 # Centre Offset input, the four-Gaussian mixture's Offsets and Variances).
 NOISE_FILTER_VERSION = 4
+# The band-limited groups (native_filter.py, new since 0.2.0) carry their own
+# revision in their name's key (" n2": the curves read ln s), so a re-bake
+# builds them anew without a format change for the groups 0.2.0 made.
 # The kernel's standard deviation at N samples is κ·N^(−KERNEL_SHARE_EXPONENT):
 # each sample's share of the footprint, τ² = κ²/N. A slower hand-over
 # (N^(−3/8)) was 8–12 % better at 4 and 16 spp but kept a blur at silhouettes
@@ -125,7 +128,7 @@ def _filter_group(model, filter_stddev_px, taps, analytic_octaves, point, with_t
     coefficients, offset, lacunarity = model.coefficients, model.offset, model.lacunarity
     key = (f"{model.dimensions} " + "/".join(f"{c:.6g}" for c in coefficients) +
            f" o{offset:g} l{lacunarity:g} d{model.distortion:g} w{model.w} k{filter_stddev_px:.4g} t{taps}" +
-           (f" p{analytic_octaves}" if point else "") + (" n" if native else "") +
+           (f" p{analytic_octaves}" if point else "") + (" n2" if native else "") +
            ("" if with_taps else " only"))
     name = f"{NOISE_FILTER} ({key} spp)"
     group = bpy.data.node_groups.get(name)
