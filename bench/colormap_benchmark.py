@@ -13,6 +13,8 @@ with the issue's PASS/FAIL criteria printed at the end.
     make bench BENCH=colormap                          full sweep (~45 min on 2 cores)
     PENUMBRA_BENCH_SECTIONS=equal_time make bench BENCH=colormap   only the equal-time sweep of the
                                                    filter's presets (issue #25), its section replaced
+                                                   (~25 min; PENUMBRA_BENCH_ET_RESUME=1 keeps the
+                                                   scenes a run already finished)
     PENUMBRA_BENCH_QUICK=1 make bench BENCH=colormap   quick check of the sweep's harness (~3 min;
                                                    the other sections are left out)
 
@@ -34,7 +36,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
-from bench.helpers import svg_plot  # noqa: E402
+from bench.helpers import colormap_equal_time_page as equal_time_page, svg_plot  # noqa: E402
 from bench.helpers.colormap_criteria import criteria, seed_statistics  # noqa: E402
 from bench.helpers.paths import ROOT, compiled_core  # noqa: E402
 
@@ -505,15 +507,23 @@ def bench_footprint():
     return out
 
 
-EQUAL_TIME_MARKER = "## Equal time: the Noise Filter's quality presets"
+EQUAL_TIME_MARKER = equal_time_page.MARKER
 QUALITY_TABLE = os.path.join(ROOT, "addon", "penumbra", "colormap", "filter_quality.json")
+# The published sweep (issue #25): four presets on the seven scenes, the
+# per-sample cost measured at 256 spp for the two cheapest; the environment
+# overrides each (bench/blender_scripts/colormap_equal_time.py).
+EQUAL_TIME_SETTINGS = {"PENUMBRA_BENCH_ET_PRESETS": "NATIVE,NATIVE_ONLY,POINT,TAPS_16_MIXTURE",
+                       "PENUMBRA_BENCH_ET_SPP": "1,4,16,64", "PENUMBRA_BENCH_ET_SPP_NATIVE": "1,4,16,64,256",
+                       "PENUMBRA_BENCH_ET_SPP_POINT": "1,4,16,64,256", "PENUMBRA_BENCH_ET_REPEATS": "4",
+                       "PENUMBRA_BENCH_ET_SCENES": "plane,constant,grazing,hsv_8_stops,detail_8_distortion,torus,"
+                                                   "plane_384"}
 
 
 def bench_equal_time():
-    """Issue #25: RMSE against render time for the plain ramp and every
-    Noise Filter preset (bench/blender_scripts/colormap_equal_time.py, one
-    process per run), the equal-time ratios, a plot, and the presets' table
-    for the add-on's panel (addon/penumbra/colormap/filter_quality.json)."""
+    """Issue #25: RMSE against render time for the plain ramp and the Noise
+    Filter's presets (bench/blender_scripts/colormap_equal_time.py, one
+    process per run), the goals' tables, plots, and the presets' table for
+    the add-on's panel (addon/penumbra/colormap/filter_quality.json)."""
     folder = os.path.join(SWEEP_OUT, "equal-time")
     os.makedirs(folder, exist_ok=True)
     out_json = os.path.join(folder, "equal_time.json")
@@ -521,88 +531,39 @@ def bench_equal_time():
     with open(log_path, "w") as log:
         proc = subprocess.run([os.path.join(ROOT, ".venv", "bin", "python"),
                                os.path.join(SCRIPTS, "colormap_equal_time.py"), "--", out_json], cwd=ROOT,
+                              env=dict(EQUAL_TIME_SETTINGS, **os.environ),
                               stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
     if proc.returncode != 0 or not os.path.isfile(out_json):
         return [EQUAL_TIME_MARKER, "", "equal-time sweep failed:", "```", open(log_path).read()[-3000:], "```", ""]
-    return equal_time_section(json.load(open(out_json)))
+    return equal_time_page.section(json.load(open(out_json)), DOCS, QUALITY_TABLE, eevee_first_renders())
 
 
-def equal_time_section(data, docs=DOCS):
-    """The page's section from colormap_equal_time.py's results; also writes
-    the plot and the add-on's presets table."""
-    scenes = data["scenes"]
-    size = "×".join(str(v) for v in data["size"])
-    out = [EQUAL_TIME_MARKER, "",
-           f"`bench/blender_scripts/colormap_equal_time.py`, Blender {data['blender']}, Cycles on the CPU, "
-           f"{data['threads']} threads, {size}: the plain ramp and every preset of the Noise Filter "
-           "(`addon/penumbra/colormap/filter_quality.py`) baked on copies of one material and rendered in one "
-           "process, methods interleaved after one untimed warm-up render each; seconds are the median over "
-           f"{data['repeats']} seeds of `bpy.ops.render.render` (wall, and CPU of the process: all threads), RMSE "
-           f"the mean over those seeds against the plain ramp at {data['reference_spp']} spp. The equal-time ratio "
-           "is the preset's RMSE over the plain ramp's read log-log off its own 1–256 spp curve at the preset's "
-           "time, clamped at the curve's ends (a filtered render slower than the plain ramp at 256 spp is "
-           "compared with that render's error, which flatters it). Goal of issue #25: ≤ 0.7 at 1, 4, 16 and "
-           f"64 spp. Scenes run: {', '.join(scenes)} (the other benchmark scenes were not run in this sweep).", ""]
-    presets = [p for p in next(iter(scenes.values()))["ratios"]]
-    table = {}
-    for name, scene in scenes.items():
-        load = scene["load_average"]
-        out += [f"### {name}", "", f"Load average (1, 5, 15 min) before: {', '.join(f'{v:.1f}' for v in load[0])}; "
-                f"after: {', '.join(f'{v:.1f}' for v in load[1])} (2-core machine shared with other jobs).", "",
-                "| method | spp | RMSE (± σ) | wall s | CPU s | equal-time ratio, wall | equal-time ratio, CPU |",
-                "|---|---:|---:|---:|---:|---:|---:|"]
-        results = scene["results"]
-        for method, rows in results.items():
-            for spp, e in sorted(rows.items(), key=lambda kv: int(kv[0])):
-                ratios = scene["ratios"].get(method)
-                cells = (f"{ratios['wall'][spp]:.2f} | {ratios['cpu'][spp]:.2f}" if ratios else "– | –")
-                out.append(f"| {method} | {spp} | {e['rmse']:.4f} ± {e['rmse_sd']:.4f} | {e['wall']:.3f} | "
-                           f"{e['cpu']:.3f} | {cells} |")
-        out.append("")
-        plain = results["plain"]
-        for preset in presets:
-            rows = results[preset]
-            common = sorted(set(rows) & set(plain), key=int)
-            cost = [rows[s]["cpu"] / plain[s]["cpu"] for s in common if int(s) >= 16]
-            entry = table.setdefault(preset, {"cost": [], "ratio": [], "scenes": []})
-            entry["cost"].append(sum(cost) / len(cost) if cost else float("nan"))
-            entry["ratio"].append(scene["ratios"][preset]["cpu"]["16"])
-            entry["scenes"].append(name)
-    plot = os.path.join(docs, "colormap", "equal-time.svg")
-    os.makedirs(os.path.dirname(plot), exist_ok=True)
-    colours = ["#c33", "#27c", "#2a2", "#a5c", "#e80", "#666"]
-    panels = []
-    for name, scene in scenes.items():
-        for clock, word in (("cpu", "CPU seconds (all threads)"), ("wall", "wall seconds")):
-            series = []
-            times = []
-            for colour, (method, rows) in zip(colours, scene["results"].items()):
-                spps = sorted(rows, key=int)
-                xs = [max(rows[s][clock], 1e-4) for s in spps]
-                times += xs
-                series.append({"name": method, "xs": xs, "ys": [rows[s]["rmse"] for s in spps], "colour": colour})
-            ticks = svg_plot.log_ticks(min(times) * 0.8, max(times) * 1.25)
-            panels.append({"title": f"{name}: RMSE vs {clock} time", "xs": [min(times) * 0.8] + ticks +
-                           [max(times) * 1.25], "xticks": ticks, "logx": True, "logy": True, "xlabel": word,
-                           "series": series})
-    svg_plot.figure(panels, plot, columns=2, caption=f"Cycles, {size}: RMSE against render time, log-log")
-    out += ["![RMSE against render time](colormap/equal-time.svg)", "",
-            "Presets (the panel's table, written to `addon/penumbra/colormap/filter_quality.json`): time = a "
-            "filtered render's CPU seconds over the plain ramp's at the same spp (mean over 16 spp and up, where "
-            "the per-sample cost dominates), error = the CPU equal-time ratio at 16 spp; means over the scenes run.",
-            "", "| preset | time per sample | equal-time ratio at 16 spp |", "|---|---:|---:|"]
-    summary = {}
-    for preset, entry in table.items():
-        summary[preset] = {"cost": sum(entry["cost"]) / len(entry["cost"]),
-                           "ratio": sum(entry["ratio"]) / len(entry["ratio"]), "scenes": entry["scenes"]}
-        out.append(f"| {preset} | {summary[preset]['cost']:.2f}× | {summary[preset]['ratio']:.2f} |")
-    with open(QUALITY_TABLE + ".tmp", "w") as f:
-        json.dump({"about": "written by bench/colormap_benchmark.py (equal-time section): cost = CPU time per "
-                   "render over the plain ramp's at the same spp (16 spp and up), ratio = equal-time RMSE over "
-                   "the plain ramp's at 16 spp (CPU seconds); means over `scenes`",
-                   "blender": data["blender"], "size": data["size"], "presets": summary}, f, indent=1)
-    os.replace(QUALITY_TABLE + ".tmp", QUALITY_TABLE)
-    return out + [""]
+# (method, samples) of the first EEVEE render of detail_8_distortion (issue
+# #25's compile-memory goal), each in a fresh Blender 3.4.
+EEVEE_FIRST = [("plain", 1), ("plain", 64), ("NATIVE", 1), ("NATIVE", 64), ("NATIVE_ONLY", 1), ("POINT", 64),
+               ("TAPS_16_MIXTURE", 1), ("TAPS_16_MIXTURE", 64)]
+
+
+def eevee_first_renders(scene="detail_8_distortion"):
+    """colormap_eevee_first_render.py's results, rendered where missing
+    (none without xvfb-run and blender)."""
+    folder = os.path.join(SWEEP_OUT, "eevee-first")
+    os.makedirs(folder, exist_ok=True)
+    runs = []
+    for method, samples in EEVEE_FIRST:
+        path = os.path.join(folder, f"{scene}_{method}_{samples}.json")
+        if not os.path.isfile(path) and isinstance(sweep_command("eevee"), list):
+            with open(os.path.splitext(path)[0] + ".log", "w") as log:
+                try:
+                    subprocess.run(["xvfb-run", "-a", "blender", "-b", "--factory-startup", "--python-exit-code",
+                                    "1", "--python", os.path.join(SCRIPTS, "colormap_eevee_first_render.py"), "--",
+                                    scene, method, str(samples), path], cwd=ROOT, stdin=subprocess.DEVNULL,
+                                   stdout=log, stderr=subprocess.STDOUT, timeout=900)
+                except subprocess.TimeoutExpired:
+                    print(f"colormap benchmark: the first EEVEE render at {method} took over 15 min", flush=True)
+        if os.path.isfile(path):
+            runs.append(json.load(open(path)))
+    return runs
 
 
 def main():
