@@ -7,10 +7,11 @@ read log-log off its own 1–256 spp curve at each filtered render's time.
 The 16-tap preset of the previous versions must fail the issue's goal
 (≤ 0.7× the plain ramp's error at equal time) by more than the 20 % margin.
 The default preset (1 Noise: one Noise Texture with its Detail cut at the
-sample's resolution) does not meet 0.7× either (measured 0.78–0.92 at 16
-spp, docs/colormap.md, "One Noise Texture per sample"): what is asserted of
-it is what it reaches, with a margin: at least 2× better than the 16-tap
-preset at equal time at 4 and 16 spp (measured: about 3×)."""
+sample's resolution) does not meet 0.7× either (measured on this plane 1.31
+at 4 spp and 0.86 at 16, on the seven benchmark scenes 0.75–1.03 at 16:
+docs/colormap-benchmark.md, "Equal time"): what is asserted of it is what
+it reaches, with a margin: at least 2× better than the 16-tap preset at
+equal time at 4 and 16 spp (measured: about 3×)."""
 
 import os
 
