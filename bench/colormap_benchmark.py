@@ -535,7 +535,28 @@ def bench_equal_time():
                               stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
     if proc.returncode != 0 or not os.path.isfile(out_json):
         return [EQUAL_TIME_MARKER, "", "equal-time sweep failed:", "```", open(log_path).read()[-3000:], "```", ""]
-    return equal_time_page.section(json.load(open(out_json)), DOCS, QUALITY_TABLE, eevee_first_renders())
+    return equal_time_page.section(json.load(open(out_json)), DOCS, QUALITY_TABLE, eevee_first_renders(),
+                                   eevee_equal_time())
+
+
+# The EEVEE sweep at equal time (issue #25): the issue #12 harness on the
+# plane at half size with the plain ramp's curve to 256 samples.
+EEVEE_EQUAL_TIME = {"PENUMBRA_BENCH_SCALE": "0.5", "PENUMBRA_BENCH_EEVEE_SAMPLES": "1,4,16,64,256",
+                    "PENUMBRA_BENCH_SEEDS": "4", "PENUMBRA_BENCH_SCENES": "plane"}
+
+
+def eevee_equal_time():
+    """colormap_eevee_render.py's results at EEVEE_EQUAL_TIME (rendered when
+    missing; None without xvfb-run and blender, or when it fails)."""
+    folder = os.path.join(SWEEP_OUT, "eevee-equal-time")
+    path = os.path.join(folder, "eevee_results.json")
+    command = sweep_command("eevee")
+    if not os.path.isfile(path) and isinstance(command, list):
+        os.makedirs(folder, exist_ok=True)
+        with open(os.path.join(folder, "eevee.log"), "w") as log:
+            subprocess.run(command + ["--", folder], cwd=ROOT, env=dict(os.environ, **EEVEE_EQUAL_TIME),
+                           stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
+    return json.load(open(path)) if os.path.isfile(path) else None
 
 
 # (method, samples) of the first EEVEE render of detail_8_distortion (issue

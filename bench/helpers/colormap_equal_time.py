@@ -7,7 +7,6 @@ this process) and the mean of their RMSEs against a high-sample plain
 render. Used by bench/colormap_benchmark.py and
 tests/blender/colormap/test_colormap_equal_time.py. Needs bpy and the add-on."""
 
-import math
 import os
 import statistics
 import time
@@ -15,7 +14,7 @@ import time
 import bpy
 import numpy as np
 
-PLAIN = "plain"
+from bench.helpers.colormap_equal_time_maths import PLAIN, equal_time_ratios, plain_error_at  # noqa: F401  (re-exported)
 
 
 def new_plane_scene(size, threads=2, **plane_options):
@@ -131,26 +130,6 @@ def sweep(renderer, reference, counts, repeats=3, seed0=0, mask=None):
             out[method][spp][key] = statistics.fmean(errors)
             out[method][spp][key + "_sd"] = statistics.stdev(errors) if len(errors) > 1 else 0.0
     return out
-
-
-def plain_error_at(plain, seconds, clock, error="rmse"):
-    """The plain ramp's RMSE (`error`: "rmse" or "rmse_interior") at
-    `seconds` of `clock` ("wall" or "cpu"), read log-log off its curve
-    {spp: entry} (linear between its points in log time and log error,
-    clamped at its ends)."""
-    points = sorted((max(e[clock], 1e-9), e[error]) for e in plain.values())
-    times = [math.log(t) for t, _ in points]
-    errors = [math.log(r) for _, r in points]
-    x = math.log(max(seconds, 1e-9))
-    # The curve's times can be out of order at the noisy low end: np.interp
-    # needs them increasing, and sorted() above made them so.
-    return float(math.exp(np.interp(x, times, errors)))
-
-
-def equal_time_ratios(results, method, clock, error="rmse"):
-    """{spp: RMSE (`error`) of `method` / the plain ramp's at the same time}."""
-    plain = results[PLAIN]
-    return {spp: e[error] / plain_error_at(plain, e[clock], clock, error) for spp, e in results[method].items()}
 
 
 def reference_image(renderer, spp, seed=1000):

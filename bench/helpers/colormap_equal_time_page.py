@@ -8,8 +8,10 @@ bpy; bench/colormap_benchmark.py calls `section`."""
 import json
 import math
 import os
+import statistics
 
 from bench.helpers import svg_plot
+from bench.helpers.colormap_equal_time_maths import equal_time_ratios, plain_error_at
 
 MARKER = "## Equal time: the Noise Filter's quality presets"
 GOAL_RATIO = 0.7            # filtered RMSE over the plain ramp's at the same time, at GOAL_SPP
@@ -105,7 +107,7 @@ def monotone_table(scenes):
     return out
 
 
-def scene_plot(name, scene, path):
+def scene_plot(name, scene, path, renderer="Cycles"):
     """RMSE against CPU and wall seconds, every method (the torus: also away
     from its silhouettes)."""
     errors = [("rmse", "")] + ([("rmse_interior", ", ≥ 2 px from background")] if name in SILHOUETTE_JUDGED else [])
@@ -124,7 +126,7 @@ def scene_plot(name, scene, path):
                            [max(times) * 1.25], "xticks": ticks, "logx": True, "logy": True, "xlabel": word,
                            "series": series})
     size = "×".join(str(v) for v in scene["size"])
-    svg_plot.figure(panels, path, columns=2, caption=f"Cycles, {name} at {size}: RMSE (mean ± σ over seeds) "
+    svg_plot.figure(panels, path, columns=2, caption=f"{renderer}, {name} at {size}: RMSE (mean ± σ over seeds) "
                     "against render time, log-log")
 
 
@@ -219,6 +221,72 @@ def eevee_first_lines(runs):
     return out + [""]
 
 
+def eevee_scene(data, name, preset):
+    """An EEVEE sweep's renders of one scene (colormap_eevee_render.py's
+    results) in the shape of a Cycles scene entry: mean RMSE over seeds,
+    median seconds, equal-time ratios; "penumbra" is named `preset`."""
+    rows = {}
+    for entry in data["renders"].values():
+        if entry["scene"] == name:
+            method = preset if entry["method"] == "penumbra" else entry["method"]
+            rows.setdefault(method, {}).setdefault(str(entry["spp"]), []).append(entry)
+    results = {}
+    for method, counts in rows.items():
+        results[method] = {}
+        for spp, entries in counts.items():
+            errors = [e["rmse"] for e in entries]
+            results[method][spp] = {"rmse": statistics.fmean(errors), "rmse_sd": statistics.stdev(errors)
+                                    if len(errors) > 1 else 0.0, "wall": statistics.median(e["seconds"] for e in entries),
+                                    "cpu": statistics.median(e["cpu_seconds"] for e in entries),
+                                    "seeds": len(entries), "load": statistics.median(e["load_average"] for e in entries)}
+    ratios = {preset: {c: equal_time_ratios(results, preset, c) for c in ("wall", "cpu")}}
+    return {"results": results, "ratios": ratios, "size": data["scenes"][name]["size"]}
+
+
+def eevee_lines(data, docs, preset="NATIVE"):
+    """EEVEE's equal-time goal (≤ 0.7× the plain ramp's RMSE at the same CPU
+    time at 1 sample; ≤ 1.0× within 2σ at 16 and 64), a plot and the
+    renders' table per scene, from colormap_eevee_render.py's results."""
+    if not data:
+        return []
+    cfg = data["config"]
+    out = ["### EEVEE Legacy at equal time", "",
+           f"`bench/blender_scripts/colormap_eevee_render.py` (the issue #12 harness), Blender {data['blender']}, "
+           f"llvmpipe under Xvfb, {cfg['threads']} threads, scale {cfg['scale']:g} of 192×108, samples "
+           f"{', '.join(str(n) for n in cfg['spp'])}, {cfg['seeds']} seeds (noise offsets), reference per seed "
+           f"at {cfg['ref_scale']}× the size and {cfg['ref_samples']} samples, downsampled. The filtered ramp is the "
+           f"default preset ({preset}). Unlike the Cycles sweep, the methods are not interleaved: each renders "
+           "all its counts after one untimed warm-up render (which compiles its shader). Times: medians over the "
+           "seeds; the plain ramp's error read log-log off its own curve at each filtered render's time (at this "
+           "size a render's fixed cost, about 0.05 CPU s, is most of it up to 16 samples, so the plain curve is "
+           "read on the best error it reaches within each time).", "",
+           "| scene | samples | plain RMSE | filtered RMSE (± σ) | CPU s plain / filtered | ratio, CPU | "
+           "ratio, wall | goal | load (1 min) |", "|---|---:|---:|---:|---:|---:|---:|---|---|"]
+    plots = []
+    for name in cfg["scenes"]:
+        scene = eevee_scene(data, name, preset)
+        results, plain = scene["results"], scene["results"].get("plain", {})
+        for spp, e in sorted(results.get(preset, {}).items(), key=lambda kv: int(kv[0])):
+            at_time = plain_error_at(plain, e["cpu"], "cpu")
+            ratio_cpu, ratio_wall = scene["ratios"][preset]["cpu"][spp], scene["ratios"][preset]["wall"][spp]
+            if spp == "1":
+                goal = "met (≤ 0.7)" if ratio_cpu <= 0.7 else "**not met** (≤ 0.7)"
+            elif spp in ("16", "64"):
+                goal = "met (≤ 1.0 within 2σ)" if e["rmse"] - at_time <= 2 * e["rmse_sd"] else \
+                    "**not met** (≤ 1.0 within 2σ)"
+            else:
+                goal = "–"
+            p = plain.get(spp)
+            out.append(f"| {name} | {spp} | {p['rmse']:.4f} | {e['rmse']:.4f} ± {e['rmse_sd']:.4f} | "
+                       f"{p['cpu']:.2f} / {e['cpu']:.2f} | {ratio_cpu:.2f} | {ratio_wall:.2f} | {goal} | "
+                       f"{e['load']:.1f} |" if p else f"| {name} | {spp} | – | {e['rmse']:.4f} | – / {e['cpu']:.2f} | "
+                       f"{ratio_cpu:.2f} | {ratio_wall:.2f} | {goal} | {e['load']:.1f} |")
+        plot = f"equal-time-eevee-{name}.svg"
+        scene_plot(name, scene, os.path.join(docs, "colormap", plot), "EEVEE Legacy")
+        plots.append(f"![{name}, EEVEE: RMSE against render time](colormap/{plot})")
+    return out + [""] + plots + [""]
+
+
 # Measured by hand with bench/blender_scripts/colormap_native_variants.py
 # (2026-11-29; the code of the variants that lost is gone, so this record is
 # kept here rather than measured by each run).
@@ -258,10 +326,11 @@ TRIED = ["### Tried on the default (issue #25)", "",
          "0.7 goal, which needs about 0.55× the plain ramp's error per sample at the default's 1.4× cost.", ""]
 
 
-def section(data, docs, table_path, eevee_runs=()):
+def section(data, docs, table_path, eevee_runs=(), eevee_sweep=None):
     """The page's section (lines); writes the plots under docs/colormap and
     the presets' table at `table_path`; `eevee_runs`: the EEVEE first
-    renders (eevee_first_lines)."""
+    renders (eevee_first_lines); `eevee_sweep`: colormap_eevee_render.py's
+    results at more sample counts (eevee_lines)."""
     scenes = data["scenes"]
     presets = list(next(iter(scenes.values()))["ratios"])
     out = intro(data, presets)
@@ -290,4 +359,4 @@ def section(data, docs, table_path, eevee_runs=()):
             "means over the scenes listed (presets not swept in this run keep their earlier entry).", "",
             "| preset | time per sample | equal-time ratio at 16 spp | scenes |", "|---|---:|---:|---|"]
     out += [f"| {p} | {e['cost']:.2f}× | {e['ratio']:.2f} | {', '.join(e['scenes'])} |" for p, e in summary.items()]
-    return out + [""] + eevee_first_lines(list(eevee_runs)) + TRIED
+    return out + [""] + eevee_lines(eevee_sweep, docs) + eevee_first_lines(list(eevee_runs)) + TRIED
