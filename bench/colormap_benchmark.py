@@ -524,19 +524,33 @@ def bench_equal_time():
     Filter's presets (bench/blender_scripts/colormap_equal_time.py, one
     process per run), the goals' tables, plots, and the presets' table for
     the add-on's panel (addon/penumbra/colormap/filter_quality.json)."""
-    folder = os.path.join(SWEEP_OUT, "equal-time")
+    out_json, log_path = equal_time_sweep("equal-time", "equal_time", EQUAL_TIME_SETTINGS)
+    if out_json is None:
+        return [EQUAL_TIME_MARKER, "", "equal-time sweep failed:", "```", open(log_path).read()[-3000:], "```", ""]
+    lit_json, _ = equal_time_sweep("lit", "lit", EQUAL_TIME_SETTINGS, LIT_SETTINGS)
+    return equal_time_page.section(json.load(open(out_json)), DOCS, QUALITY_TABLE, eevee_first_renders(),
+                                   eevee_equal_time(), json.load(open(lit_json)) if lit_json else None)
+
+
+# The lit scene (issue #25): the default preset against the plain ramp.
+LIT_SETTINGS = {"PENUMBRA_BENCH_ET_PRESETS": "NATIVE", "PENUMBRA_BENCH_ET_SPP_NATIVE": "1,4,16,64",
+                "PENUMBRA_BENCH_ET_SCENES": "lit_plane,lit_torus"}
+
+
+def equal_time_sweep(folder_name, stem, settings, forced=None):
+    """Runs colormap_equal_time.py into SWEEP_OUT/folder_name/stem.json with
+    `settings` under the environment and `forced` over it; (that path, or
+    None when it failed, and the log's path)."""
+    folder = os.path.join(SWEEP_OUT, folder_name)
     os.makedirs(folder, exist_ok=True)
-    out_json = os.path.join(folder, "equal_time.json")
-    log_path = os.path.join(folder, "equal_time.log")
+    out_json = os.path.join(folder, stem + ".json")
+    log_path = os.path.join(folder, stem + ".log")
     with open(log_path, "w") as log:
         proc = subprocess.run([os.path.join(ROOT, ".venv", "bin", "python"),
                                os.path.join(SCRIPTS, "colormap_equal_time.py"), "--", out_json], cwd=ROOT,
-                              env=dict(EQUAL_TIME_SETTINGS, **os.environ),
-                              stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
-    if proc.returncode != 0 or not os.path.isfile(out_json):
-        return [EQUAL_TIME_MARKER, "", "equal-time sweep failed:", "```", open(log_path).read()[-3000:], "```", ""]
-    return equal_time_page.section(json.load(open(out_json)), DOCS, QUALITY_TABLE, eevee_first_renders(),
-                                   eevee_equal_time())
+                              env={**settings, **os.environ, **(forced or {})}, stdin=subprocess.DEVNULL,
+                              stdout=log, stderr=subprocess.STDOUT)
+    return (out_json if proc.returncode == 0 and os.path.isfile(out_json) else None), log_path
 
 
 # The EEVEE sweep at equal time (issue #25): the issue #12 harness on the

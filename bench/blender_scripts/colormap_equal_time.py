@@ -10,7 +10,8 @@ in this one process after a warm-up render per method,
 PENUMBRA_BENCH_ET_REPEATS (4) seeds, 2 threads; the reference is the plain
 ramp at PENUMBRA_BENCH_ET_REF (2048) spp. Scenes: PENUMBRA_BENCH_ET_SCENES
 (all of colormap_render.SCENES), their size factor times
-PENUMBRA_BENCH_ET_SCALE on 192×108 (0.5). Errors over the whole image and
+PENUMBRA_BENCH_ET_SCALE on 192×108 (0.5); lit_plane and lit_torus are the
+lit scene (colormap_equal_time.new_lit_scene). Errors over the whole image and
 over the pixels at least 2 px from the background. PENUMBRA_BENCH_ET_RESUME=1
 keeps the scenes an earlier run already wrote to OUT.json. See
 bench/helpers/colormap_equal_time.py."""
@@ -48,7 +49,10 @@ def sweep_scene(name, scale, presets, counts, data, folder):
     """One scene's entry of the results: its renders, equal-time ratios over
     the whole image and away from silhouettes (colormap_render.interior_mask),
     load average and seconds."""
-    scene, obj, material = equal_time.new_bench_scene(name, scale)
+    if name.startswith("lit_"):     # issue #25's lit scene: lit_plane, lit_torus
+        scene, obj, material = equal_time.new_lit_scene(name[len("lit_"):], scale)
+    else:
+        scene, obj, material = equal_time.new_bench_scene(name, scale)
     materials = {equal_time.PLAIN: material}
     for preset in presets:
         materials[preset] = equal_time.bake_quality(scene, obj, material, preset, os.path.join(folder, name, "lut"))

@@ -35,6 +35,41 @@ def new_bench_scene(name, scale, threads=2):
     return _cycles_scene(size, threads, builder, dict(options))
 
 
+LIT_HDRI = ("studiolights/world", "courtyard.exr")  # shipped with Blender; the one without a sun (max 50)
+
+
+def new_lit_scene(name, scale, threads=2):
+    """Issue #25's lit scene: the benchmark scene `name` (plane or torus)
+    with the ramp as the Base Color of a Principled BSDF (Roughness 0.4)
+    instead of an emission, under Blender's courtyard HDRI as the World
+    (importance map 128 wide), 2 diffuse and 2 glossy bounces. Returns
+    (scene, object, material)."""
+    scene, obj, material = new_bench_scene(name, scale, threads)
+    tree = material.node_tree
+    emission = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeEmission")
+    ramp = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeValToRGB")
+    output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Roughness"].default_value = 0.4
+    tree.links.new(ramp.outputs["Color"], bsdf.inputs["Base Color"])
+    tree.links.new(bsdf.outputs[0], output.inputs["Surface"])
+    tree.nodes.remove(emission)
+    world = scene.world.node_tree
+    environment = world.nodes.new("ShaderNodeTexEnvironment")
+    environment.image = bpy.data.images.load(os.path.join(bpy.utils.system_resource("DATAFILES",
+                                                                                       path=LIT_HDRI[0]), LIT_HDRI[1]))
+    world.links.new(environment.outputs["Color"], world.nodes["Background"].inputs["Color"])
+    world.nodes["Background"].inputs["Strength"].default_value = 1.0
+    # The World's importance map is rebuilt at every render: at its default
+    # 1024 it took over a second, more than the small renders themselves.
+    scene.world.cycles.sampling_method = "MANUAL"
+    scene.world.cycles.sample_map_resolution = 128
+    cycles = scene.cycles
+    cycles.max_bounces, cycles.diffuse_bounces, cycles.glossy_bounces = 4, 2, 2
+    cycles.transmission_bounces = cycles.volume_bounces = cycles.transparent_max_bounces = 0
+    return scene, obj, material
+
+
 def _cycles_scene(size, threads, builder, options):
     from bench.helpers.paths import use_addon
     use_addon()                 # examples/scenes: colormap_scene

@@ -221,6 +221,45 @@ def eevee_first_lines(runs):
     return out + [""]
 
 
+def lit_lines(data, docs):
+    """The lit scene's goal (at every equal time no worse than the plain
+    ramp within 2σ), in CPU and wall seconds, with a plot per object."""
+    if not data:
+        return []
+    presets = list(next(iter(data["scenes"].values()))["ratios"])
+    out = ["### The lit scene at equal time", "",
+           f"The same harness (`colormap_equal_time.py`, scenes lit_plane and lit_torus: "
+           "`colormap_equal_time.new_lit_scene`), Blender "
+           f"{data['blender']}, Cycles, {data['threads']} threads, {'×'.join(str(v) for v in data['size'])}: the "
+           "ramp as the Base Color of a Principled BSDF (Roughness 0.4) under Blender's courtyard HDRI (importance "
+           "map 128 wide), 2 diffuse and 2 glossy bounces, on the benchmark plane and on the torus; "
+           f"{data['repeats']} seeds, reference the plain ramp at {data['reference_spp']} spp, whole image. Goal "
+           "of issue #25: at every equal time the filtered ramp is no worse than the plain ramp within 2σ "
+           "(filtered RMSE − the plain ramp's at the same time ≤ 2σ of the filtered RMSE over the seeds).", "",
+           "| scene | preset | spp | RMSE (± σ) | plain at the same CPU time | ratio, CPU | ratio, wall | "
+           "no worse within 2σ (CPU; wall) | load (1 min) |", "|---|---|---:|---:|---:|---:|---:|---|---|"]
+    plots, helps = [], []
+    for name, scene in data["scenes"].items():
+        plain = scene["results"]["plain"]
+        helps += [f"{name} {p} {s} spp ({r:.2f})" for p in presets
+                  for s, r in scene["ratios"][p]["cpu"].items() if r < 1.0]
+        for preset in presets:
+            for spp, e in sorted(scene["results"][preset].items(), key=lambda kv: int(kv[0])):
+                verdicts = ["met" if e["rmse"] - plain_error_at(plain, e[c], c) <= 2 * e["rmse_sd"] else "**not met**"
+                            for c in ("cpu", "wall")]
+                out.append(f"| {name} | {preset} | {spp} | {e['rmse']:.4f} ± {e['rmse_sd']:.4f} | "
+                           f"{plain_error_at(plain, e['cpu'], 'cpu'):.4f} | {scene['ratios'][preset]['cpu'][spp]:.2f} | "
+                           f"{scene['ratios'][preset]['wall'][spp]:.2f} | {verdicts[0]}; {verdicts[1]} | "
+                           f"{scene['load_average'][0][0]:.1f} → {scene['load_average'][1][0]:.1f} |")
+        plot = f"equal-time-{name}.svg"
+        scene_plot(name, scene, os.path.join(docs, "colormap", plot), "Cycles, lit")
+        plots.append(f"![{name}: RMSE against render time](colormap/{plot})")
+    out += ["", "Where it helps (a CPU equal-time ratio below 1): " + ("; ".join(helps) if helps else
+            "nowhere in this run. Per sample the filtered ramp is within a few percent of the plain ramp here "
+            "(the lighting's noise is most of the error), so its extra time per sample decides.")]
+    return out + [""] + plots + [""]
+
+
 def eevee_scene(data, name, preset):
     """An EEVEE sweep's renders of one scene (colormap_eevee_render.py's
     results) in the shape of a Cycles scene entry: mean RMSE over seeds,
@@ -326,11 +365,12 @@ TRIED = ["### Tried on the default (issue #25)", "",
          "0.7 goal, which needs about 0.55× the plain ramp's error per sample at the default's 1.4× cost.", ""]
 
 
-def section(data, docs, table_path, eevee_runs=(), eevee_sweep=None):
+def section(data, docs, table_path, eevee_runs=(), eevee_sweep=None, lit=None):
     """The page's section (lines); writes the plots under docs/colormap and
     the presets' table at `table_path`; `eevee_runs`: the EEVEE first
     renders (eevee_first_lines); `eevee_sweep`: colormap_eevee_render.py's
-    results at more sample counts (eevee_lines)."""
+    results at more sample counts (eevee_lines); `lit`: the lit scene's
+    results (lit_lines)."""
     scenes = data["scenes"]
     presets = list(next(iter(scenes.values()))["ratios"])
     out = intro(data, presets)
@@ -359,4 +399,5 @@ def section(data, docs, table_path, eevee_runs=(), eevee_sweep=None):
             "means over the scenes listed (presets not swept in this run keep their earlier entry).", "",
             "| preset | time per sample | equal-time ratio at 16 spp | scenes |", "|---|---:|---:|---|"]
     out += [f"| {p} | {e['cost']:.2f}× | {e['ratio']:.2f} | {', '.join(e['scenes'])} |" for p, e in summary.items()]
-    return out + [""] + eevee_lines(eevee_sweep, docs) + eevee_first_lines(list(eevee_runs)) + TRIED
+    return out + [""] + lit_lines(lit, docs) + eevee_lines(eevee_sweep, docs) + \
+        eevee_first_lines(list(eevee_runs)) + TRIED
