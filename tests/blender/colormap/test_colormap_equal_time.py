@@ -60,3 +60,17 @@ def test_sixteen_taps_fail_the_equal_time_goal(ratios, spp):
 def test_default_preset_beats_sixteen_taps_at_equal_time(ratios, spp):
     assert filter_quality.DEFAULT != LEGACY
     assert ratios[filter_quality.DEFAULT][spp] * 2.0 < ratios[LEGACY][spp], ratios
+
+
+def test_plain_curve_is_read_on_its_best_error_within_a_time():
+    """At EEVEE's small sizes a 1-sample render took longer than a 16-sample
+    one (fixed costs): the plain ramp's error at a time is the best it
+    reaches within that time, not a line through the slower, worse render."""
+    import math
+    plain = {1: {"cpu": 0.07, "rmse": 0.18}, 4: {"cpu": 0.05, "rmse": 0.09}, 16: {"cpu": 0.06, "rmse": 0.035},
+             64: {"cpu": 0.12, "rmse": 0.013}}
+    t = (math.log(0.08) - math.log(0.06)) / (math.log(0.12) - math.log(0.06))
+    between = math.exp((1 - t) * math.log(0.035) + t * math.log(0.013))
+    assert abs(equal_time.plain_error_at(plain, 0.08, "cpu") - between) < 1e-9
+    assert abs(equal_time.plain_error_at(plain, 0.01, "cpu") - 0.09) < 1e-9      # clamped at the fastest
+    assert abs(equal_time.plain_error_at(plain, 10.0, "cpu") - 0.013) < 1e-9     # and at the slowest
