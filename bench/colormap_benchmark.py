@@ -554,23 +554,30 @@ def equal_time_sweep(folder_name, stem, settings, forced=None):
 
 
 # The EEVEE sweep at equal time (issue #25): the issue #12 harness on the
-# plane at half size with the plain ramp's curve to 256 samples.
+# plane at half size with the plain ramp's curve to 256 samples, for the
+# default preset and for 1 Noise Only (no taps at one sample).
 EEVEE_EQUAL_TIME = {"PENUMBRA_BENCH_SCALE": "0.5", "PENUMBRA_BENCH_EEVEE_SAMPLES": "1,4,16,64,256",
                     "PENUMBRA_BENCH_SEEDS": "4", "PENUMBRA_BENCH_SCENES": "plane"}
+EEVEE_PRESETS = ("NATIVE", "NATIVE_ONLY")
 
 
 def eevee_equal_time():
-    """colormap_eevee_render.py's results at EEVEE_EQUAL_TIME (rendered when
-    missing; None without xvfb-run and blender, or when it fails)."""
-    folder = os.path.join(SWEEP_OUT, "eevee-equal-time")
-    path = os.path.join(folder, "eevee_results.json")
-    command = sweep_command("eevee")
-    if not os.path.isfile(path) and isinstance(command, list):
-        os.makedirs(folder, exist_ok=True)
-        with open(os.path.join(folder, "eevee.log"), "w") as log:
-            subprocess.run(command + ["--", folder], cwd=ROOT, env=dict(os.environ, **EEVEE_EQUAL_TIME),
-                           stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
-    return json.load(open(path)) if os.path.isfile(path) else None
+    """{preset: colormap_eevee_render.py's results at EEVEE_EQUAL_TIME}
+    (rendered when missing; None without xvfb-run and blender, or when it
+    fails)."""
+    out = {}
+    for preset in EEVEE_PRESETS:
+        folder = os.path.join(SWEEP_OUT, "eevee-equal-time" + ("" if preset == "NATIVE" else "-" + preset))
+        path = os.path.join(folder, "eevee_results.json")
+        command = sweep_command("eevee")
+        if not os.path.isfile(path) and isinstance(command, list):
+            os.makedirs(folder, exist_ok=True)
+            with open(os.path.join(folder, "eevee.log"), "w") as log:
+                subprocess.run(command + ["--", folder], cwd=ROOT, env=dict(
+                    os.environ, **EEVEE_EQUAL_TIME, PENUMBRA_BENCH_FILTER_QUALITY=preset),
+                               stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT)
+        out[preset] = json.load(open(path)) if os.path.isfile(path) else None
+    return out
 
 
 # (method, samples) of the first EEVEE render of detail_8_distortion (issue

@@ -24,6 +24,7 @@ Settings (environment; defaults are the full sweep of the issue):
   PENUMBRA_BENCH_EEVEE_SCENES  the EEVEE sweep's own subset (default: as above)
   PENUMBRA_BENCH_THREADS    render threads (2)
   PENUMBRA_BENCH_PROBE      1/0: run the timing probe (default: quick mode only)
+  PENUMBRA_BENCH_FILTER_QUALITY  the Noise Filter preset baked (default: the add-on's)
 
 OUT/<renderer>_results.json holds one entry per (scene, method, spp, seed)
 with the signature of what it was measured with (Blender, scene, size,
@@ -100,7 +101,8 @@ def config(renderer, quick=None, environment=True):
                                            "PENUMBRA_BENCH_EEVEE_SCENES" in env else "PENUMBRA_BENCH_SCENES"),
                                           ",".join(base["scenes"])).split(",") if s],
            "threads": int(env.get("PENUMBRA_BENCH_THREADS", "2")),
-           "probe": env.get("PENUMBRA_BENCH_PROBE", "1" if quick else "0") not in ("", "0")}
+           "probe": env.get("PENUMBRA_BENCH_PROBE", "1" if quick else "0") not in ("", "0"),
+           "filter_quality": env.get("PENUMBRA_BENCH_FILTER_QUALITY") or None}
     cfg.update(base[renderer])
     prefix = "PENUMBRA_BENCH_" if renderer == "cycles" else "PENUMBRA_BENCH_EEVEE_"
     if prefix + ("SPP" if renderer == "cycles" else "SAMPLES") in env:
@@ -216,6 +218,8 @@ def build(runner, name, size, cfg, out, bake=True):
     built = getattr(colormap_scene, builder)(**kwargs)
     if not bake:
         return Context(name, scene, built, time.perf_counter() - started)
+    if cfg.get("filter_quality"):
+        scene.penumbra.colormap.filter_quality = cfg["filter_quality"]
     scene.penumbra.colormap.output_folder = os.path.join(out, runner.name, name, "lookup")
     result = bpy.ops.penumbra.bake_colormap_lut()
     if result != {"FINISHED"}:
@@ -306,7 +310,8 @@ def signatures(runner, name, size, cfg, addon):
     on the add-on build."""
     base = _hash(HARNESS_VERSION, bpy.app.version_string, runner.name, SCENES[name][:2], size,
                  _file_hash([colormap_scene.__file__]), runner.reference_settings(cfg))
-    return {"reference": base, "plain": base, "penumbra": _hash(base, addon)}
+    quality = cfg.get("filter_quality")      # the add-on's default keeps the signatures of before
+    return {"reference": base, "plain": base, "penumbra": _hash(base, addon, quality) if quality else _hash(base, addon)}
 
 
 def reference(runner, ctx, seed, signature, folder, results):

@@ -282,48 +282,54 @@ def eevee_scene(data, name, preset):
     return {"results": results, "ratios": ratios, "size": data["scenes"][name]["size"]}
 
 
-def eevee_lines(data, docs, preset="NATIVE"):
+def eevee_lines(sweeps, docs):
     """EEVEE's equal-time goal (≤ 0.7× the plain ramp's RMSE at the same CPU
     time at 1 sample; ≤ 1.0× within 2σ at 16 and 64), a plot and the
-    renders' table per scene, from colormap_eevee_render.py's results."""
-    if not data:
+    renders' table per scene and preset, from colormap_eevee_render.py's
+    results {preset: results} (one sweep per preset)."""
+    sweeps = {p: d for p, d in (sweeps or {}).items() if d}
+    if not sweeps:
         return []
+    data = next(iter(sweeps.values()))
     cfg = data["config"]
     out = ["### EEVEE Legacy at equal time", "",
            f"`bench/blender_scripts/colormap_eevee_render.py` (the issue #12 harness), Blender {data['blender']}, "
            f"llvmpipe under Xvfb, {cfg['threads']} threads, scale {cfg['scale']:g} of 192×108, samples "
            f"{', '.join(str(n) for n in cfg['spp'])}, {cfg['seeds']} seeds (noise offsets), reference per seed "
-           f"at {cfg['ref_scale']}× the size and {cfg['ref_samples']} samples, downsampled. The filtered ramp is the "
-           f"default preset ({preset}). Unlike the Cycles sweep, the methods are not interleaved: each renders "
-           "all its counts after one untimed warm-up render (which compiles its shader). Times: medians over the "
-           "seeds; the plain ramp's error read log-log off its own curve at each filtered render's time (at this "
-           "size a render's fixed cost, about 0.05 CPU s, is most of it up to 16 samples, so the plain curve is "
-           "read on the best error it reaches within each time).", "",
-           "| scene | samples | plain RMSE | filtered RMSE (± σ) | CPU s plain / filtered | ratio, CPU | "
-           "ratio, wall | goal | load (1 min) |", "|---|---:|---:|---:|---:|---:|---:|---|---|"]
+           f"at {cfg['ref_scale']}× the size and {cfg['ref_samples']} samples, downsampled; one sweep per preset "
+           f"({', '.join(sweeps)}; PENUMBRA_BENCH_FILTER_QUALITY), each with its own plain renders. Unlike the "
+           "Cycles sweep, the methods are not interleaved: each renders all its counts after one untimed warm-up "
+           "render (which compiles its shader). Times: medians over the seeds; the plain ramp's error read "
+           "log-log off its own curve at each filtered render's time (at this size a render's fixed cost, about "
+           "0.05 CPU s, is most of it up to 16 samples, so the plain curve is read on the best error it reaches "
+           "within each time).", "",
+           "| scene | preset | samples | plain RMSE | filtered RMSE (± σ) | CPU s plain / filtered | ratio, CPU | "
+           "ratio, wall | goal | load (1 min) |", "|---|---|---:|---:|---:|---:|---:|---:|---|---|"]
     plots = []
-    for name in cfg["scenes"]:
-        scene = eevee_scene(data, name, preset)
-        results, plain = scene["results"], scene["results"].get("plain", {})
-        for spp, e in sorted(results.get(preset, {}).items(), key=lambda kv: int(kv[0])):
-            at_time = plain_error_at(plain, e["cpu"], "cpu")
-            ratio_cpu, ratio_wall = scene["ratios"][preset]["cpu"][spp], scene["ratios"][preset]["wall"][spp]
-            if spp == "1":
-                goal = "met (≤ 0.7)" if ratio_cpu <= 0.7 else "**not met** (≤ 0.7)"
-            elif spp in ("16", "64"):
-                goal = "met (≤ 1.0 within 2σ)" if e["rmse"] - at_time <= 2 * e["rmse_sd"] else \
-                    "**not met** (≤ 1.0 within 2σ)"
-            else:
-                goal = "–"
-            p = plain.get(spp)
-            out.append(f"| {name} | {spp} | {p['rmse']:.4f} | {e['rmse']:.4f} ± {e['rmse_sd']:.4f} | "
-                       f"{p['cpu']:.2f} / {e['cpu']:.2f} | {ratio_cpu:.2f} | {ratio_wall:.2f} | {goal} | "
-                       f"{e['load']:.1f} |" if p else f"| {name} | {spp} | – | {e['rmse']:.4f} | – / {e['cpu']:.2f} | "
-                       f"{ratio_cpu:.2f} | {ratio_wall:.2f} | {goal} | {e['load']:.1f} |")
-        plot = f"equal-time-eevee-{name}.svg"
-        scene_plot(name, scene, os.path.join(docs, "colormap", plot), "EEVEE Legacy")
-        plots.append(f"![{name}, EEVEE: RMSE against render time](colormap/{plot})")
+    for preset, data in sweeps.items():
+        for name in data["config"]["scenes"]:
+            scene = eevee_scene(data, name, preset)
+            out += [_eevee_row(name, preset, spp, e, scene) for spp, e in
+                    sorted(scene["results"].get(preset, {}).items(), key=lambda kv: int(kv[0]))]
+            plot = f"equal-time-eevee-{name}-{preset}.svg"
+            scene_plot(name, scene, os.path.join(docs, "colormap", plot), f"EEVEE Legacy, {preset}")
+            plots.append(f"![{name}, EEVEE, {preset}: RMSE against render time](colormap/{plot})")
     return out + [""] + plots + [""]
+
+
+def _eevee_row(name, preset, spp, e, scene):
+    plain = scene["results"].get("plain", {})
+    at_time = plain_error_at(plain, e["cpu"], "cpu")
+    ratio_cpu, ratio_wall = scene["ratios"][preset]["cpu"][spp], scene["ratios"][preset]["wall"][spp]
+    if spp == "1":
+        goal = "met (≤ 0.7)" if ratio_cpu <= 0.7 else "**not met** (≤ 0.7)"
+    elif spp in ("16", "64"):
+        goal = "met (≤ 1.0 within 2σ)" if e["rmse"] - at_time <= 2 * e["rmse_sd"] else "**not met** (≤ 1.0 within 2σ)"
+    else:
+        goal = "–"
+    p = plain.get(spp, {"rmse": math.nan, "cpu": math.nan})
+    return (f"| {name} | {preset} | {spp} | {p['rmse']:.4f} | {e['rmse']:.4f} ± {e['rmse_sd']:.4f} | "
+            f"{p['cpu']:.2f} / {e['cpu']:.2f} | {ratio_cpu:.2f} | {ratio_wall:.2f} | {goal} | {e['load']:.1f} |")
 
 
 # Measured by hand with bench/blender_scripts/colormap_native_variants.py
@@ -369,7 +375,7 @@ def section(data, docs, table_path, eevee_runs=(), eevee_sweep=None, lit=None):
     """The page's section (lines); writes the plots under docs/colormap and
     the presets' table at `table_path`; `eevee_runs`: the EEVEE first
     renders (eevee_first_lines); `eevee_sweep`: colormap_eevee_render.py's
-    results at more sample counts (eevee_lines); `lit`: the lit scene's
+    results at more sample counts per preset (eevee_lines); `lit`: the lit scene's
     results (lit_lines)."""
     scenes = data["scenes"]
     presets = list(next(iter(scenes.values()))["ratios"])
