@@ -13,8 +13,10 @@ with the issue's PASS/FAIL criteria printed at the end.
     make bench BENCH=colormap                          full sweep (~45 min on 2 cores)
     PENUMBRA_BENCH_SECTIONS=equal_time make bench BENCH=colormap   only the equal-time sweep of the
                                                    filter's presets (issue #25), its section replaced
-                                                   (~25 min; PENUMBRA_BENCH_ET_RESUME=1 keeps the
-                                                   scenes a run already finished)
+                                                   (~30 min: seven scenes, the lit scene, EEVEE's sweeps
+                                                   and first renders; PENUMBRA_BENCH_ET_RESUME=1 keeps
+                                                   the scenes a run already finished; EEVEE's results
+                                                   in out/ are reused)
     PENUMBRA_BENCH_QUICK=1 make bench BENCH=colormap   quick check of the sweep's harness (~3 min;
                                                    the other sections are left out)
 
