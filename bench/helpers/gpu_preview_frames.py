@@ -30,7 +30,9 @@ sys.path[:0] = [os.path.join(ROOT, "build", "addon"), os.path.join(ROOT, "exampl
 ARGS = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
 SIZES = [int(v) for v in (ARGS[ARGS.index("--vertices") + 1] if "--vertices" in ARGS else "10000").split(",")]
 SETTLE_SECONDS = 0.3
-FRAMES = int(ARGS[ARGS.index("--frames") + 1]) if "--frames" in ARGS else 12
+# Frames of each state, a number for every size (the last one repeats): a
+# forced redraw at 1M vertices takes seconds on llvmpipe.
+FRAMES = [int(f) for f in (ARGS[ARGS.index("--frames") + 1] if "--frames" in ARGS else "12").split(",")]
 
 if "--gpu-init" in ARGS:
     import gpu
@@ -81,12 +83,12 @@ def ms(samples):
     return round(1000.0 * statistics.median(samples), 3)
 
 
-def frame_costs(scene, override):
-    """Alternating frames with the preview off and on: medians in ms."""
+def frame_costs(scene, override, frames):
+    """Alternating frames with the preview off and on, `frames` of each: medians in ms."""
     settings = scene.penumbra.visibility
     off, on, upload, on_cpu, off_redraw, on_redraw, split = [], [], [], [], [], [], {}
     frame = 2
-    for k in range(2 * FRAMES + 2):
+    for k in range(2 * frames + 2):
         preview = k % 2 == 1
         settings.gpu_preview = preview
         redraw(override)  # the toggle's own work (the model's upload) is done before the timed frame
@@ -117,7 +119,7 @@ def frame_costs(scene, override):
             off_redraw.append(with_redraw)
     settings.gpu_preview = False
     on_total = [a + b for a, b in zip(on, upload)]
-    return {"frames": FRAMES, "off_frame_set_ms": ms(off), "on_frame_set_ms": ms(on), "on_upload_ms": ms(upload),
+    return {"frames": frames, "off_frame_set_ms": ms(off), "on_frame_set_ms": ms(on), "on_upload_ms": ms(upload),
             "on_total_ms": ms(on_total), "ratio": round(statistics.median(on_total) / statistics.median(off), 3),
             "preview_cpu_ms": round(ms(on_cpu) + ms(upload), 3),
             "split_ms": {k: ms(v) for k, v in split.items() if k != "model_upload"},
@@ -125,11 +127,11 @@ def frame_costs(scene, override):
             "on_frame_and_redraw_ms": ms(on_redraw) if override else None}
 
 
-def measure(vertices, tmp, override):
+def measure(vertices, frames, tmp, override):
     t = time.perf_counter()
     scene, obj = character(vertices, tmp)
     out = {"vertices": len(obj.data.vertices), "build_seconds": round(time.perf_counter() - t, 1)}
-    out.update(frame_costs(scene, override))
+    out.update(frame_costs(scene, override, frames), load_average=round(os.getloadavg()[0], 2))
     # The model's load: file to the GPU's textures.
     from penumbra.visibility import frame_shading, gpu_model, mesh_data
     frame_shading.forget()
@@ -162,7 +164,7 @@ def measure_all(result):
         bpy.context.preferences.system.viewport_aa = "OFF"
         bpy.context.scene.display.viewport_aa = "OFF"
     with tempfile.TemporaryDirectory() as tmp:
-        result["sizes"] = [measure(v, tmp, override) for v in SIZES]
+        result["sizes"] = [measure(v, FRAMES[min(k, len(FRAMES) - 1)], tmp, override) for k, v in enumerate(SIZES)]
 
 
 report(measure_all)

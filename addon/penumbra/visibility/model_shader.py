@@ -174,6 +174,15 @@ def helper_source(width):
             "  return vec3(texelFetch(frame_geometry, texel_at(i), 0).r, texelFetch(frame_geometry, texel_at(i + 1), 0).r,\n"
             "              texelFetch(frame_geometry, texel_at(i + 2), 0).r);\n}\n"
             "int loop_vertex(int i) { return int(texelFetch(model_loops, texel_at(i), 0).r); }\n"
+            # Blender's math::safe_acos_approx, as the CPU's corner angles take it
+            # (core/visibility/vertex_kernels.cpp): the exact acos differs by up to
+            # 4.5e-5 rad, which a reference edge nearly along the normal amplifies
+            # into the tangent (2.6e-3 of Phong shading on a twisted character).
+            "float safe_acos_approx(float x)\n{\n"
+            "  float f = abs(x);\n"
+            "  float m = f < 1.0 ? 1.0 - (1.0 - f) : 1.0;\n"
+            "  float a = sqrt(1.0 - m) * (1.5707963267 + m * (-0.213300989 + m * (0.077980478 + m * -0.02164095)));\n"
+            "  return x < 0.0 ? 3.14159265358979 - a : a;\n}\n"
             # Blender 4.x/5.x's vertex normal (core/visibility/vertex_normals.hpp):
             # over the vertex's faces, Newell's face normal times the corner's angle.
             "vec3 vertex_normal(int vertex, vec3 own)\n{\n"
@@ -196,7 +205,7 @@ def helper_source(width):
             "    vec3 to_previous = geometry_at(3 * loop_vertex(first + (at + size - 1) % size)) - own;\n"
             "    vec3 to_next = geometry_at(3 * loop_vertex(first + (at + 1) % size)) - own;\n"
             "    float cosine = dot(normalize(to_previous), normalize(to_next));\n"
-            "    sum += face * acos(clamp(cosine, -1.0, 1.0));\n"
+            "    sum += face * safe_acos_approx(cosine);\n"
             "  }\n"
             "  float sum_length = length(sum);\n"
             "  if (begin == end) { return normalize(own); }  // no face: the position's direction, as Blender\n"

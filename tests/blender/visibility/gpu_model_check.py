@@ -12,7 +12,8 @@ weights, biases, joint directions and per-vertex block layouts, a few
 vertices with no block) on a wavy sheet, an unseen random pose and a
 non-identity world matrix, for every BRDF, SH order 1–8 and 1–4 lobes,
 under a uniform World of radiance 1; plus a few configurations under random
-lighting. Prints one line `RESULT {json}`.
+lighting. With --humanoid-detail D, also the humanoid baked at that detail,
+once per BRDF (gpu_model_humanoid.py). Prints one line `RESULT {json}`.
 """
 
 import math
@@ -25,10 +26,12 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-sys.path[:0] = [os.path.join(ROOT, "build", "addon")]
+sys.path[:0] = [os.path.join(ROOT, "build", "addon"), os.path.join(ROOT, "examples", "scenes"), HERE]
 
 ARGS = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else sys.argv[1:]
 VERTICES = int(ARGS[ARGS.index("--vertices") + 1]) if "--vertices" in ARGS else 1500
+# The humanoid's detail (examples/scenes/visibility_humanoid.py; 10: ~100k vertices), 0 for none.
+HUMANOID_DETAIL = float(ARGS[ARGS.index("--humanoid-detail") + 1]) if "--humanoid-detail" in ARGS else 0.0
 JOINTS = 5
 
 if "--gpu-init" in ARGS:
@@ -149,6 +152,13 @@ def check(result):
         cases.append(dict(compare(4, 2, brdf, mesh, rng, lighting), lighting="random"))
     result["seconds"] = round(time.perf_counter() - started, 1)
     result["cases"] = cases
+    if HUMANOID_DETAIL:
+        import tempfile
+        from gpu_model_humanoid import humanoid_cases
+        started = time.perf_counter()
+        with tempfile.TemporaryDirectory() as tmp:
+            result["humanoid"] = dict(humanoid_cases(HUMANOID_DETAIL, tmp),
+                                      seconds=round(time.perf_counter() - started, 1))
     penumbra.unregister()
 
 
