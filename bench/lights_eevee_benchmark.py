@@ -22,10 +22,14 @@ World strength 0 for its renders.
 Writes the section "Shadowed comparison (EEVEE)" of docs/lights-benchmark.md
 and its pictures (docs/lights/eevee_<blender>_<scene>_*.png):
 
-    .venv/bin/python bench/lights_eevee_benchmark.py [--blenders 3.4,5.2,4.5] [--lock /work/bench.lock]
+    .venv/bin/python bench/lights_eevee_benchmark.py [--blenders 3.4,5.2,4.5] [--time-limit S] [--resume]
+        [--section-only] [--lock /work/bench.lock]
 
 Each Blender's result is kept in OUT/result_<blender>.json; the section is
 written from every result there, so Blenders run apart publish together.
+--time-limit S stops a Blender after S seconds and publishes the renders it
+finished (goal 2 on every scene first); --resume then renders only the rest
+(delete a render's .json in OUT/<blender> to render it again).
 PENUMBRA_BENCH_QUICK=1: two scenes, few samples (a smoke test, not a result)."""
 
 import json
@@ -94,8 +98,13 @@ def run_blender(tag, out, time_limit):
     command = ["nice", "-n", "5"] + BLENDERS[tag] + [out, cache, os.path.join(OUT, "opposite.exr")]
     log = os.path.join(OUT, f"log_{tag}.txt")  # each render's line as it comes: a long run can be followed
     env = dict(os.environ, GALLIVM_PERF="nopt", LP_NUM_THREADS="2")
+    earlier, earlier_load = 0.0, []  # the stopped run's, its renders reused
     if "--resume" in sys.argv:
         env["PENUMBRA_EEVEE_RESUME"] = "1"
+        if os.path.exists(os.path.join(out, "partial.json")):
+            with open(os.path.join(out, "partial.json")) as f:
+                stopped = json.load(f)
+            earlier, earlier_load = stopped.get("seconds", 0.0), stopped.get("load", [])
     with open(log, "w") as f:
         try:
             code = subprocess.run(command, stdout=f, stderr=subprocess.STDOUT, timeout=time_limit, env=env).returncode
@@ -111,7 +120,8 @@ def run_blender(tag, out, time_limit):
     if not result["ok"]:
         print(text[-4000:], result.get("error", ""))
         sys.exit(f"the renders in Blender {tag} failed (log: {log})")
-    return dict(result, tag=tag, date=time.strftime("%Y-%m-%d %H:%M"), quick=QUICK)
+    return dict(result, tag=tag, date=time.strftime("%Y-%m-%d %H:%M"), quick=QUICK, earlier_seconds=earlier,
+                earlier_load=earlier_load)
 
 
 def baseline(entries):
@@ -204,13 +214,31 @@ def budget_rows(result):
     return rows
 
 
+def budget_summary(result):
+    """One line: the budget's error change and time saved, their range over the scenes."""
+    pairs = [(e[f"rig_{GOAL2_COUNT}"], e[f"rig_{GOAL2_COUNT}_budget{SHADOW_BUDGET}"]) for e in result["scenes"].values()
+             if f"rig_{GOAL2_COUNT}" in e and f"rig_{GOAL2_COUNT}_budget{SHADOW_BUDGET}" in e]
+    if not pairs:
+        return []
+    points = [100 * (b["error"] - a["error"]) for a, b in pairs]
+    saved = [1 - b["seconds"] / a["seconds"] for a, b in pairs]
+    within = "no scene worse by more than 1 point" if max(points) <= 1 else "worse by more than 1 point on a scene"
+    return [f"- Blender {result['blender']}: the budget's error is {min(points):+.2f} to {max(points):+.2f} points "
+            f"from the all-shadowed rig's ({within}); render time saved {min(saved):+.0%} to "
+            f"{max(saved):+.0%}, median {sorted(saved)[len(saved) // 2]:+.0%}."]
+
+
 def verdict(met):
     return {True: "met", False: "not met", None: "not measured on every scene (see the tables)"}[met]
 
 
 def run_facts(results):
-    return "; ".join(f"Blender {r['blender']} ({r['engine']}): {r['seconds']:.0f} s on {r['date']}, load average "
-                     f"{min(r['load']):.1f}–{max(r['load']):.1f} (1 min, sampled between scenes)" for r in results)
+    return "; ".join(f"Blender {r['blender']} ({r['engine']}): {r['seconds']:.0f} s"
+                     + (f" (resumed: plus {r['earlier_seconds']:.0f} s of earlier runs whose finished renders it "
+                        "reused)" if r.get("earlier_seconds") else "")
+                     + f", ended {r['date']} UTC, load average {min(r['load'] + r.get('earlier_load', [])):.1f}–"
+                     f"{max(r['load'] + r.get('earlier_load', [])):.1f} (1 min, sampled between scenes)"
+                     for r in results)
 
 
 def section(results):
@@ -288,13 +316,13 @@ def section(results):
         "",
         f"**Shadow budget** (issue #26 item 3): the {GOAL2_COUNT}-sun rig with every sun shadowed against "
         f"`shadow_budget={SHADOW_BUDGET}` (the suns that carry the visible shadows keep theirs). EEVEE Legacy "
-        "grants cascaded shadow maps to at most 8 suns in any case. Render times are single renders on the "
-        "shared machine: differences of a few percent are noise.",
+        "grants cascaded shadow maps to at most 8 suns in any case. Each pair is rendered back to back; render "
+        "times are single renders on the shared machine: differences of a few percent are noise.",
         "",
         "| Blender | scene | shadowed | error | render (s) | shadowed, budget | error, budget | render (s) | "
         "Δ error (points) | time saved |",
         "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|",
-    ] + budget + [
+    ] + budget + [""] + [line for r in results for line in budget_summary(r)] + [
         "",
         f"Pictures: {pictures}.",
     ]
@@ -315,6 +343,8 @@ def main():
     argv = sys.argv
     tags = argv[argv.index("--blenders") + 1].split(",") if "--blenders" in argv else list(BLENDERS)
     time_limit = float(argv[argv.index("--time-limit") + 1]) if "--time-limit" in argv else None
+    if "--section-only" in argv:  # the stored results, published again (a changed table, no render)
+        tags = []
     os.makedirs(OUT, exist_ok=True)
     if not os.path.exists(os.path.join(OUT, "opposite.exr")):
         opposite_map(os.path.join(OUT, "opposite.exr"))
