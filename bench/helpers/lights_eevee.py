@@ -1,7 +1,8 @@
 """What the EEVEE light-rig measurements share, inside a Blender: EEVEE's
-engine id in this Blender and a render's mean luminance (issue #26:
-bench/blender_scripts/lights_single_sun.py, lights_eevee_goal1.py and the
-make-test check tests/blender/lights_eevee_check.py)."""
+engine id in this Blender, a render's mean luminance and the maps a scene is
+lit by (issue #26: bench/blender_scripts/lights_single_sun.py,
+lights_eevee_goal1.py, lights_eevee_render.py and the make-test check
+tests/blender/lights_eevee_check.py)."""
 
 import os
 
@@ -47,3 +48,15 @@ def mean_luminance(scene, engine, folder):
     pixels = np.array(image.pixels[:], dtype=np.float64).reshape(-1, 4)
     bpy.data.images.remove(image)
     return float(np.mean(pixels[:, :3] @ LUMINANCE))
+
+
+def light_by_map(scene, path):
+    """Points the World's Environment Texture at the map in `path` (the
+    sunrise scene of bench/helpers/lights_render_scene.py, another map)."""
+    env = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeTexEnvironment")
+    env.image = bpy.data.images.load(path, check_existing=True)
+
+
+def bundled_map(name):
+    """Path of this Blender's bundled World `name`.exr (3.4's differ from 4.5's and 5.2's)."""
+    return os.path.join(bpy.utils.system_resource("DATAFILES"), "studiolights", "world", name + ".exr")

@@ -5,6 +5,7 @@ rig reproduces the map's lighting (analytically and in a Cycles render)."""
 import json
 import math
 import os
+import warnings
 
 import bpy
 import mathutils
@@ -243,6 +244,18 @@ def test_bad_input_reports_and_changes_nothing(addon, tmp_path):
     assert not os.path.exists(tmp_path / "x.json")
     # A count below the core's minimum (1) cannot reach the operator: the property clamps it.
     assert bpy.ops.penumbra.build_light_rig.get_rna_type().properties["count"].hard_min == 1
+
+
+def test_a_blend_relative_source_gives_no_warning(addon, tmp_path):
+    """Blender 5.x warns (RuntimeWarning, '... does not support blend
+    relative "//" prefix') when a path property without
+    PATH_SUPPORTS_BLEND_RELATIVE is given "//...", as users and scripts give
+    the Source (compat.BLEND_RELATIVE_PATH). 3.4 and 4.5 never warn."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with pytest.raises(RuntimeError, match="missing"):
+            bpy.ops.penumbra.build_light_rig(filepath="//missing.exr", json_path="//x.json")
+    assert [str(w.message) for w in caught if "//" in str(w.message)] == []
 
 
 def _render_plane(scene, tmp_path, name):
