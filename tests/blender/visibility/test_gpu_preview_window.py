@@ -8,6 +8,7 @@ synthetic models (bench/helpers/gpu_preview_scene.py): this is about
 following the scene, the shading's exactness is test_gpu_model_in_blender.py's."""
 
 import importlib
+import weakref
 
 import bpy
 import pytest
@@ -174,7 +175,9 @@ def test_deleting_the_object_frees_its_textures(baseline, tmp_path):
 def test_a_model_change_frees_the_old_models_textures(baseline, tmp_path):
     name = make_character(tmp_path)
     redraw()
-    old = on_main(lambda: id(_gpu()[1]._previews[name].batch))
+    # A weak reference, not id(): CPython may place the new model's copy at
+    # the freed one's address.
+    old = on_main(lambda: weakref.ref(_gpu()[1]._previews[name].batch))
 
     def other_model():
         from bench.helpers.gpu_preview_scene import synthetic_model
@@ -186,7 +189,9 @@ def test_a_model_change_frees_the_old_models_textures(baseline, tmp_path):
         bpy.context.scene.frame_set(bpy.context.scene.frame_current + 1)
     on_main(other_model)
     redraw()
-    assert on_main(lambda: id(_gpu()[1]._previews[name].batch)) != old
+    assert old() is None  # the old model's GPU copy is gone
+    assert on_main(lambda: _gpu()[1]._previews[name].entry.path).endswith("other.pzh")
+    assert on_main(lambda: _gpu()[1]._previews[name].batch) is not None
     assert _textures() == baseline + 7  # the new model's only
 
 
