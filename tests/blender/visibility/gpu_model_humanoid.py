@@ -12,27 +12,13 @@ import time
 import bpy
 import numpy as np
 
+# gpu_model_check.py puts the repository's root and tests/blender on sys.path.
+from bench.helpers.gpu_preview_scene import empty_scene
+from visibility_character_scenes import uniform_world
+
 BAKED_FRAMES = (1, 3, 5, 7)  # the operator's range 1..7 step 2
 UNSEEN_FRAME = 6             # between two baked poses, never baked
 RAYS = 8
-
-
-def empty_scene():
-    """Removes the startup file's objects (the cube would occlude the
-    character); reading the factory settings again would leave a window's
-    script without a context."""
-    for collection in (bpy.data.objects, bpy.data.meshes, bpy.data.armatures, bpy.data.actions,
-                       bpy.data.cameras, bpy.data.lights, bpy.data.worlds):
-        for block in list(collection):
-            collection.remove(block)
-    return bpy.context.scene
-
-
-def uniform_world(scene):
-    from penumbra import compat
-    world = bpy.data.worlds.new("Uniform")
-    compat.ensure_nodes(world).nodes["Background"].inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    scene.world = world
 
 
 def baked_humanoid(detail, tmp):
