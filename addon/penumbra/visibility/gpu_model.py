@@ -149,6 +149,7 @@ class ModelOnGpu:
                                                 elem=gpu.types.GPUIndexBuf(type="TRIS", seq=tri))
             self.bytes += tri.nbytes
         self.pose_bytes = None  # the last uploaded PenumbraPose (what the viewport shows)
+        self.shading_bytes = None  # and the last uploaded shading block
         _live.add(self)
         self.pose = None      # GPUUniformBuf, per frame
         self.shading = None   # GPUUniformBuf, per frame
@@ -163,7 +164,7 @@ class ModelOnGpu:
             grid = model_shader.GeometryGrid(self.vertex_count, self.width, self.max_texture_size)
             size, flat = grid.fill(frame.geometry)
         self.geometry = _texture(size, flat, "R32F")
-        self.pose_bytes = frame.pose
+        self.pose_bytes, self.shading_bytes = frame.pose, frame.shading
         if self.pose is None:
             self.pose = gpu.types.GPUUniformBuf(frame.pose)
         else:

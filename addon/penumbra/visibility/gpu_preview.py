@@ -123,8 +123,14 @@ def object_inputs(obj, scene, depsgraph=None):
 
 # The GPU side ---------------------------------------------------------------------
 
+_gpu_found = False  # a backend once found stays for the session: not asked again every frame
+
+
 def gpu_unavailable_reason():
     """None when Blender's gpu module can draw here; else why not, in a sentence."""
+    global _gpu_found
+    if _gpu_found:
+        return None
     try:
         import gpu
     except ImportError as error:
@@ -141,6 +147,7 @@ def gpu_unavailable_reason():
         return f"no GPU available: {error}"
     if backend == "NONE":
         return "no GPU available: Blender has no GPU backend here"
+    _gpu_found = True
     return None
 
 
@@ -251,17 +258,18 @@ def _enabled_objects(scene):
 
 def _shading_bytes(obj, scene, order, brdf, settings):
     """The shading uniform block, rebuilt only when its inputs changed (the
-    operator blocks cost more than the rest of a frame's CPU work)."""
-    lighting, _ = world_lighting.world_lighting(scene, order)
+    operator blocks cost more than the rest of a frame's CPU work). The
+    lighting is compared by identity: lighting_until_edited gives the same
+    array until the World is read again."""
+    lighting = world_lighting.lighting_until_edited(scene, order)
     camera = tuple(scene.camera.matrix_world.translation) if scene.camera else (0.0, 0.0, 0.0)
-    key = (order, brdf, settings.phong_exponent, camera, tuple(settings.transmission[:]),
-           np.asarray(lighting, dtype=np.float64).tobytes())
+    key = (order, brdf, settings.phong_exponent, camera, tuple(settings.transmission[:]))
     cached = _uniform_cache.get(obj.name)
-    if cached is None or cached[0] != key:
-        cached = (key, preview_shader.uniform_data(order, lighting, brdf, settings.phong_exponent, camera,
-                                                   np.array(settings.transmission[:])))
+    if cached is None or cached[0] != key or cached[1] is not lighting:
+        cached = (key, lighting, preview_shader.uniform_data(order, lighting, brdf, settings.phong_exponent, camera,
+                                                             np.array(settings.transmission[:])))
         _uniform_cache[obj.name] = cached
-    return cached[1]
+    return cached[2]
 
 
 _geometry_grids = {}  # object name -> (loaded model, model_shader.GeometryGrid): the frame texture's array
@@ -282,25 +290,27 @@ def frame_of(obj, scene, depsgraph=None):
     depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
     features = model.pose_features(frame_shading.posed_rotations(obj, model, depsgraph))
     stamps.append(time.perf_counter())
-    world = frame_shading._read_positions(obj, depsgraph, entry)
-    stamps.append(time.perf_counter())
-    max_size = gpu.capabilities.max_texture_size_get()
     grid = _geometry_grids.get(obj.name)
     if grid is None or grid[0] is not entry:
+        max_size = gpu.capabilities.max_texture_size_get()
         grid = _geometry_grids[obj.name] = (entry, model_shader.GeometryGrid(
             model.vertex_count, model_shader.texture_width(max_size), max_size))
-    frame = gpu_model.FrameInputs(grid[1].fill(entry.positions), model_shader.pose_data(
+    world = frame_shading._read_positions(obj, depsgraph, entry, out=grid[1].positions)
+    stamps.append(time.perf_counter())
+    frame = gpu_model.FrameInputs((grid[1].size, grid[1].flat), model_shader.pose_data(
         features, model_shader.feature_vec4_count(len(features)), world),
         _shading_bytes(obj, scene, model.order, brdf, settings), brdf)
     stamps.append(time.perf_counter())
-    frame.seconds = dict(zip(("pose_features", "read_positions", "pack"), np.diff(stamps).tolist()))
-    frame.seconds["cpu_total"] = stamps[-1] - stamps[0]
+    frame.seconds = {"pose_features": stamps[1] - stamps[0], "read_positions": stamps[2] - stamps[1],
+                     "pack": stamps[3] - stamps[2], "cpu_total": stamps[3] - stamps[0]}
     return entry, frame
 
 
-def _forget_absent(scene):
-    """Drops what the preview holds for objects no longer enabled in the scene."""
-    enabled = {obj.name for obj in _enabled_objects(scene)} if scene is not None else set()
+def _forget_absent(scene, enabled=None):
+    """Drops what the preview holds for objects no longer enabled in the scene
+    (`enabled`: their names, where the caller has just walked them)."""
+    if enabled is None:
+        enabled = {obj.name for obj in _enabled_objects(scene)} if scene is not None else set()
     for name in [n for n in _previews if n not in enabled]:
         del _previews[name]
         _uniform_cache.pop(name, None)
@@ -337,7 +347,7 @@ def update(scene, depsgraph=None):
                 preview.entry, preview.batch = entry, None
             preview.frame = frame
             last_timings = dict(frame.seconds)
-        _forget_absent(scene)
+        _forget_absent(scene, seen)
         if not seen:
             problems.append("no object has Shade from Model on")
         _set_status(scene, "; ".join(problems))
@@ -358,6 +368,7 @@ def _tag_redraw():
 
 def toggled(scene):
     """gpu_preview switched: report the GPU's absence, or compute the preview now."""
+    world_lighting.forget_reads()  # off, the World's edits are not followed
     if not scene.penumbra.visibility.gpu_preview:
         _previews.clear()
         _uniform_cache.clear()
@@ -377,6 +388,7 @@ def request_refresh():
     """Object settings changed in the UI (BRDF, exponent, ...): recompute."""
     scene = bpy.context.scene if bpy.context else None
     if scene is not None and scene.penumbra.visibility.gpu_preview:
+        world_lighting.forget_reads()
         update(scene)
         _tag_redraw()
 
@@ -423,9 +435,15 @@ def _draw():
             pass
 
 
+def _updated(depsgraph, kinds):
+    kinds = tuple(getattr(bpy.types, name) for name in kinds)
+    return any(isinstance(u.id, kinds) for u in depsgraph.updates)
+
+
 def _armature_or_view_changed(scene, depsgraph):
-    relevant = any(isinstance(u.id, bpy.types.World) or
-                   (isinstance(u.id, bpy.types.Object) and u.id.type == "CAMERA") for u in depsgraph.updates)
+    # Not every Scene update: the preview's own status is a scene property.
+    relevant = _updated(depsgraph, ("World", "NodeTree", "Image")) or any(
+        isinstance(u.id, bpy.types.Object) and u.id.type == "CAMERA" for u in depsgraph.updates)
     return relevant or frame_shading._drives_enabled_object(scene, depsgraph.updates)
 
 
@@ -434,6 +452,8 @@ def _armature_or_view_changed(scene, depsgraph):
 @persistent
 def on_frame_change(scene, depsgraph=None):
     if scene.penumbra.visibility.gpu_preview and not frame_shading._busy:
+        if depsgraph is None or any(depsgraph.id_type_updated(kind) for kind in world_lighting.RELIGHTING_ID_TYPES):
+            world_lighting.forget_reads()
         update(scene, depsgraph)
 
 
@@ -441,6 +461,8 @@ def on_frame_change(scene, depsgraph=None):
 def on_depsgraph_update(scene, depsgraph):
     if _previews:  # an object deleted or switched off holds nothing on the GPU
         _forget_absent(scene)
+    if _updated(depsgraph, world_lighting.EDITS_THAT_RELIGHT):
+        world_lighting.forget_reads()
     if scene.penumbra.visibility.gpu_preview and not frame_shading._busy and _armature_or_view_changed(scene, depsgraph):
         update(scene, depsgraph)
 
@@ -451,6 +473,7 @@ def on_undo(scene, *_args):
     _previews.clear()
     _uniform_cache.clear()
     _geometry_grids.clear()
+    world_lighting.forget_reads()
     if scene is not None and scene.penumbra.visibility.gpu_preview:
         update(scene)
 
@@ -463,6 +486,7 @@ def on_load(*_args):
     _mesh_buffers.clear()
     _uniform_cache.clear()
     _geometry_grids.clear()
+    world_lighting.forget_reads()
     scene = getattr(bpy.context, "scene", None)
     if scene is not None and scene.penumbra.visibility.gpu_preview:
         update(scene)

@@ -29,6 +29,8 @@ tangent follows the same edge as core/visibility/mesh_frames.hpp's, with the
 same fallback (Duff et al. 2017) where the edge is along the normal.
 """
 
+import functools
+
 import numpy as np
 
 EXACT_INTEGER = 1 << 24  # floats hold every integer below this
@@ -126,17 +128,27 @@ def pose_data(features, feature_vec4s, world):
     """PenumbraPose's bytes: the features, then the world matrix as the core
     splits it (linear, normal matrix = inverse transpose, or identity when
     singular; offset), columns as vec4s."""
-    world = np.asarray(world, dtype=np.float64).reshape(4, 4)
-    linear = world[:3, :3]
-    determinant = np.linalg.det(linear)
-    normal_matrix = np.linalg.inv(linear).T if determinant != 0.0 and np.isfinite(determinant) else np.eye(3)
     data = np.zeros((feature_vec4s + 7, 4), dtype=np.float32)
     flat = data[:feature_vec4s].reshape(-1)
     flat[:len(features)] = features
-    data[feature_vec4s:feature_vec4s + 3, :3] = linear.T.astype(np.float32)
-    data[feature_vec4s + 3:feature_vec4s + 6, :3] = normal_matrix.T.astype(np.float32)
-    data[feature_vec4s + 6, :3] = world[:3, 3]
+    data[feature_vec4s:] = _world_columns(np.asarray(world, dtype=np.float64).reshape(4, 4).tobytes())
     return data.tobytes()
+
+
+@functools.lru_cache(maxsize=16)
+def _world_columns(world_bytes):
+    """The world matrix's 7 vec4s of PenumbraPose. Kept per matrix: while a
+    bone is posed the object stays put, and the inverse is most of the cost."""
+    world = np.frombuffer(world_bytes, dtype=np.float64).reshape(4, 4)
+    linear = world[:3, :3]
+    determinant = np.linalg.det(linear)
+    normal_matrix = np.linalg.inv(linear).T if determinant != 0.0 and np.isfinite(determinant) else np.eye(3)
+    columns = np.zeros((7, 4), dtype=np.float32)
+    columns[0:3, :3] = linear.T
+    columns[3:6, :3] = normal_matrix.T
+    columns[6, :3] = world[:3, 3]
+    columns.setflags(write=False)
+    return columns
 
 
 def pose_block_source(feature_vec4s):
@@ -162,6 +174,12 @@ class GeometryGrid:
         self.vertex_count = vertex_count
         self.size = texture_grid(3 * vertex_count, width, max_texture_size)
         self.flat = np.zeros(self.size[0] * self.size[1], dtype=np.float32)
+
+    @property
+    def positions(self):
+        """(V, 3) float32 view of the grid that a mesh's positions are read into
+        directly (the copy fill() makes costs as much as the read at 100k)."""
+        return self.flat[:3 * self.vertex_count].reshape(self.vertex_count, 3)
 
     def fill(self, positions):
         self.flat[:3 * self.vertex_count] = np.asarray(positions, dtype=np.float32).reshape(-1)

@@ -36,6 +36,53 @@ def world_lighting(scene, order):
     return lighting, (f"{note}; {pixel_warning}" if pixel_warning else note)
 
 
+# The GPU preview's last read of the World, per SH order: read again only
+# after forget_reads(), which the preview's handlers call when the depsgraph
+# says the World, a node tree or an image changed (an edit, or keyframes and
+# drivers at a frame change: Blender tags those IDs then, and no others), on
+# undo and load; and every frame while it shows a movie or an image sequence.
+# Reading the node tree every frame cost about a tenth of the preview's
+# frame change at 100k vertices.
+_reads = {}
+# depsgraph.id_type_updated() kinds, and depsgraph.updates ID classes, that
+# can change the World's light (a Scene update: the World swapped, the engine
+# changed; a frame change updates the Scene too, so only the other handler
+# looks at it)
+RELIGHTING_ID_TYPES = ("WORLD", "NODETREE", "IMAGE")
+EDITS_THAT_RELIGHT = ("World", "NodeTree", "Image", "Scene")
+
+
+def lighting_until_edited(scene, order):
+    """world_lighting(scene, order)[0], kept until forget_reads()."""
+    kept = _reads.get(order)
+    if kept is not None and not kept[1]:
+        return kept[0]
+    lighting, _ = world_lighting(scene, order)
+    _reads[order] = (lighting, _shows_moving_image(scene.world))
+    return lighting
+
+
+def forget_reads():
+    _reads.clear()
+
+
+def _shows_moving_image(world_block):
+    """Whether the World's nodes, groups included, show a movie or an image sequence."""
+    tree = getattr(world_block, "node_tree", None) if world_block is not None else None
+    stack, seen = ([tree] if tree is not None else []), set()
+    while stack:
+        tree = stack.pop()
+        for node in tree.nodes:
+            image = getattr(node, "image", None)
+            if image is not None and image.source in {"MOVIE", "SEQUENCE"}:
+                return True
+            group = getattr(node, "node_tree", None)
+            if group is not None and group.name not in seen:
+                seen.add(group.name)
+                stack.append(group)
+    return False
+
+
 def _pixel_warning(image, stats):
     """What was wrong with an environment image's pixels ('' when nothing)."""
     bad, negative = stats["non_finite_pixels"], stats["negative_pixels"]

@@ -147,6 +147,72 @@ def test_a_modal_bone_rotation_updates_the_preview_while_dragging(baseline, tmp_
     on_main(lambda: bpy.ops.object.mode_set(mode="OBJECT"))
 
 
+def drawn_shading(name):
+    """The shading block (lighting, BRDF operator, camera) the viewport last uploaded."""
+    return on_main(lambda: _gpu()[1]._previews[name].batch.shading_bytes)
+
+
+def scene_shading(name):
+    """The shading block of the scene as it is now, its World read afresh."""
+    def compute():
+        import numpy as np
+        from penumbra.visibility import frame_shading, preview_shader, world_lighting
+        obj, scene = bpy.data.objects[name], bpy.context.scene
+        order, settings = frame_shading.loaded_model(obj).model.order, obj.penumbra_visibility
+        lighting, _ = world_lighting.world_lighting(scene, order)
+        return preview_shader.uniform_data(order, lighting, settings.brdf.lower(), settings.phong_exponent,
+                                           tuple(scene.camera.matrix_world.translation),
+                                           np.array(settings.transmission[:]))
+    return on_main(compute)
+
+
+def _background():
+    return bpy.context.scene.world.node_tree.nodes["Background"]
+
+
+def test_the_preview_follows_world_edits_and_an_animated_world(baseline, tmp_path):
+    """The preview keeps its read of the World between frames (issue 27's
+    frame cost), so each way the World's light can change must reach it."""
+    name = make_character(tmp_path)
+    on_main(lambda: bpy.context.scene.frame_set(3))
+    redraw()
+    before = drawn_shading(name)
+    assert before == scene_shading(name)
+
+    # An edit in the UI: the depsgraph update handler, no frame change.
+    on_main(lambda: _background().inputs["Color"].__setattr__("default_value", (0.2, 0.5, 1.0, 1.0)))
+    let_the_loop_turn(3)
+    redraw()
+    edited = drawn_shading(name)
+    assert edited != before and edited == scene_shading(name)
+
+    # A script's edit followed at once by a frame change, no event in between.
+    def edit_then_change_frame():
+        _background().inputs["Strength"].default_value = 2.0
+        bpy.context.scene.frame_set(4)
+    on_main(edit_then_change_frame)
+    redraw()
+    scripted = drawn_shading(name)
+    assert scripted != edited and scripted == scene_shading(name)
+
+    # Keyframes: the light changes with the frame, with no edit at all.
+    def keyframe_strength():
+        strength = _background().inputs["Strength"]
+        strength.default_value = 1.0
+        strength.keyframe_insert("default_value", frame=1)
+        strength.default_value = 4.0
+        strength.keyframe_insert("default_value", frame=21)
+    on_main(keyframe_strength)
+    let_the_loop_turn(3)
+    seen = []
+    for frame in (6, 16):
+        on_main(lambda: bpy.context.scene.frame_set(frame))
+        redraw()
+        seen.append(drawn_shading(name))
+        assert seen[-1] == scene_shading(name)
+    assert seen[0] != seen[1]
+
+
 def test_two_characters_with_different_brdfs_draw_in_one_redraw(baseline, tmp_path):
     first = make_character(tmp_path, "Diffuse", brdf="DIFFUSE")
     second = make_character(tmp_path, "Shiny", empty=False, brdf="PHONG", seed=28)
