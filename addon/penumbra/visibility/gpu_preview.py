@@ -441,8 +441,7 @@ def _updated(depsgraph, kinds):
 
 
 def _armature_or_view_changed(scene, depsgraph):
-    # Not every Scene update: the preview's own status is a scene property.
-    relevant = _updated(depsgraph, ("World", "NodeTree", "Image")) or any(
+    relevant = _updated(depsgraph, world_lighting.EDITS_THAT_RELIGHT) or any(
         isinstance(u.id, bpy.types.Object) and u.id.type == "CAMERA" for u in depsgraph.updates)
     return relevant or frame_shading._drives_enabled_object(scene, depsgraph.updates)
 
@@ -461,9 +460,12 @@ def on_frame_change(scene, depsgraph=None):
 def on_depsgraph_update(scene, depsgraph):
     if _previews:  # an object deleted or switched off holds nothing on the GPU
         _forget_absent(scene)
+    # Not every Scene update relights: the timeline's cursor and the preview's own status are scene properties.
+    relit = _updated(depsgraph, ("Scene",)) and world_lighting.the_scene_changed(scene)
     if _updated(depsgraph, world_lighting.EDITS_THAT_RELIGHT):
         world_lighting.forget_reads()
-    if scene.penumbra.visibility.gpu_preview and not frame_shading._busy and _armature_or_view_changed(scene, depsgraph):
+    if scene.penumbra.visibility.gpu_preview and not frame_shading._busy and (
+            relit or _armature_or_view_changed(scene, depsgraph)):
         update(scene, depsgraph)
 
 

@@ -39,17 +39,24 @@ def world_lighting(scene, order):
 # The GPU preview's last read of the World, per SH order: read again only
 # after forget_reads(), which the preview's handlers call when the depsgraph
 # says the World, a node tree or an image changed (an edit, or keyframes and
-# drivers at a frame change: Blender tags those IDs then, and no others), on
-# undo and load; and every frame while it shows a movie or an image sequence.
-# Reading the node tree every frame cost about a tenth of the preview's
-# frame change at 100k vertices.
+# drivers at a frame change: Blender tags those IDs then, and no others), when
+# a Scene update changed what it was read for (the_scene_changed), on undo and
+# load; and every frame while it shows a movie or an image sequence. Reading
+# the node tree every frame cost about a tenth of the preview's frame change
+# at 100k vertices.
 _reads = {}
+_read_for = [None]  # what the reads were read for: (World, engine, working space)
 # depsgraph.id_type_updated() kinds, and depsgraph.updates ID classes, that
-# can change the World's light (a Scene update: the World swapped, the engine
-# changed; a frame change updates the Scene too, so only the other handler
-# looks at it)
+# can change the World's light. Not the Scene: the timeline's frame cursor
+# updates it while scrubbing (the_scene_changed looks closer).
 RELIGHTING_ID_TYPES = ("WORLD", "NODETREE", "IMAGE")
-EDITS_THAT_RELIGHT = ("World", "NodeTree", "Image", "Scene")
+EDITS_THAT_RELIGHT = ("World", "NodeTree", "Image")
+
+
+def _reading_context(scene):
+    world_block = scene.world
+    return (world_block.as_pointer() if world_block is not None else 0, scene.render.engine,
+            color.file_working_space())
 
 
 def lighting_until_edited(scene, order):
@@ -59,11 +66,22 @@ def lighting_until_edited(scene, order):
         return kept[0]
     lighting, _ = world_lighting(scene, order)
     _reads[order] = (lighting, _shows_moving_image(scene.world))
+    _read_for[0] = _reading_context(scene)
     return lighting
 
 
 def forget_reads():
     _reads.clear()
+
+
+def the_scene_changed(scene):
+    """A Scene update: forgets the reads if the scene's World, render engine
+    (its World Output target) or working space is no longer what they were
+    read for. True when it did."""
+    if _reads and _reading_context(scene) != _read_for[0]:
+        _reads.clear()
+        return True
+    return False
 
 
 def _shows_moving_image(world_block):

@@ -213,6 +213,38 @@ def test_the_preview_follows_world_edits_and_an_animated_world(baseline, tmp_pat
     assert seen[0] != seen[1]
 
 
+def test_the_preview_follows_a_new_world_and_the_render_engine(baseline, tmp_path):
+    """A Scene update relights only when it changes what the World was read
+    for: another World, or an engine with its own World Output."""
+    name = make_character(tmp_path)
+
+    def engine(name):
+        bpy.context.scene.render.engine = name
+
+    def other_world():
+        from penumbra import compat
+        world = bpy.data.worlds.new("Other")
+        tree = compat.ensure_nodes(world)
+        tree.nodes["Background"].inputs["Color"].default_value = (1.0, 0.3, 0.1, 1.0)
+        for_cycles = tree.nodes.new("ShaderNodeBackground")
+        for_cycles.inputs["Color"].default_value = (0.1, 1.0, 0.3, 1.0)
+        output = tree.nodes.new("ShaderNodeOutputWorld")
+        output.target = "CYCLES"
+        tree.links.new(for_cycles.outputs["Background"], output.inputs["Surface"])
+        bpy.context.scene.world = world
+    on_main(lambda: engine("BLENDER_EEVEE_NEXT" if bpy.app.version >= (4, 2, 0) else "BLENDER_EEVEE"))
+    redraw()
+    first = drawn_shading(name)
+    seen = [first]
+    for change in (other_world, lambda: engine("CYCLES")):
+        on_main(change)
+        let_the_loop_turn(3)
+        redraw()
+        seen.append(drawn_shading(name))
+        assert seen[-1] == scene_shading(name)
+    assert len(set(seen)) == 3
+
+
 def test_two_characters_with_different_brdfs_draw_in_one_redraw(baseline, tmp_path):
     first = make_character(tmp_path, "Diffuse", brdf="DIFFUSE")
     second = make_character(tmp_path, "Shiny", empty=False, brdf="PHONG", seed=28)
