@@ -147,9 +147,10 @@ def _ensure_attributes(mesh):
 
 def _read_positions(obj, depsgraph, entry, out=None):
     """The evaluated mesh's object-space positions into `out` (V, 3) float32
-    (default entry.positions), and the object's world matrix. Read from the evaluated object's own mesh
-    (modifiers and shape keys applied), not a to_mesh() copy: the same
-    values at ~1/20 of the time (0.5 against 12 ms at 100k vertices in 3.4).
+    (default entry.positions), and the object's world matrix. Read from the
+    evaluated object's own mesh (modifiers and shape keys applied), not a
+    to_mesh() copy: the same values at ~1/20 of the time (0.5 against 12 ms
+    at 100k vertices in 3.4).
     Blender's normals are not read: reading them makes Blender compute them
     for the pose, which costs more than the C++ computing the same normals
     (frame_shading.hpp)."""

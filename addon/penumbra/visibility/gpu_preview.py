@@ -368,7 +368,7 @@ def _tag_redraw():
 
 def toggled(scene):
     """gpu_preview switched: report the GPU's absence, or compute the preview now."""
-    world_lighting.forget_reads()  # off, the World's edits are not followed
+    world_lighting.forget_reads()  # while off, frame changes were not checked for a relit World
     if not scene.penumbra.visibility.gpu_preview:
         _previews.clear()
         _uniform_cache.clear()
