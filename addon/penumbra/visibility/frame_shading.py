@@ -16,7 +16,7 @@ import numpy as np
 from bpy.app.handlers import persistent
 
 from .. import native
-from . import armature_data, mesh_data, world_lighting
+from . import armature_data, enabled_objects, mesh_data, world_lighting
 from .input_error import VisibilityInputError
 
 SHADING_ATTRIBUTE = "penumbra_shading"
@@ -235,10 +235,8 @@ def shade_enabled_objects(scene, depsgraph=None):
         return
     _busy = True
     try:
-        for obj in scene.objects:
-            settings = getattr(obj, "penumbra_visibility", None)
-            if settings is None or not settings.enabled or obj.type != "MESH":
-                continue
+        for obj in enabled_objects.in_scene(scene):
+            settings = obj.penumbra_visibility
             try:
                 shade_object(obj, scene, depsgraph)
                 if settings.status:
@@ -255,10 +253,7 @@ def shade_enabled_objects(scene, depsgraph=None):
 
 def _drives_enabled_object(scene, update_ids):
     names = {getattr(u.id, "name", None) for u in update_ids}
-    for obj in scene.objects:
-        s = getattr(obj, "penumbra_visibility", None)
-        if s is None or not s.enabled or obj.type != "MESH":
-            continue
+    for obj in enabled_objects.in_scene(scene):
         for modifier in obj.modifiers:
             if modifier.type == "ARMATURE" and modifier.object is not None and modifier.object.name in names:
                 return True

@@ -40,7 +40,7 @@ import numpy as np
 from bpy.app.handlers import persistent
 
 from .. import native
-from . import frame_shading, gpu_model, mesh_data, model_shader, preview_shader, world_lighting
+from . import enabled_objects, frame_shading, gpu_model, mesh_data, model_shader, preview_shader, world_lighting
 from .preview_shader import MAX_LOBES, MAX_ORDER, MODELS, check_configuration, lobe_vec4_count  # noqa: F401
 from .input_error import VisibilityInputError
 
@@ -250,10 +250,7 @@ def _set_status(scene, message):
 
 
 def _enabled_objects(scene):
-    for obj in scene.objects:
-        settings = getattr(obj, "penumbra_visibility", None)
-        if settings is not None and settings.enabled and obj.type == "MESH":
-            yield obj
+    return enabled_objects.in_scene(scene)
 
 
 def _shading_bytes(obj, scene, order, brdf, settings):
@@ -476,6 +473,7 @@ def on_undo(scene, *_args):
     _uniform_cache.clear()
     _geometry_grids.clear()
     world_lighting.forget_reads()
+    enabled_objects.forget()  # an undo may switch an object back on, which no callback reports
     if scene is not None and scene.penumbra.visibility.gpu_preview:
         update(scene)
 
@@ -489,6 +487,7 @@ def on_load(*_args):
     _uniform_cache.clear()
     _geometry_grids.clear()
     world_lighting.forget_reads()
+    enabled_objects.forget()
     scene = getattr(bpy.context, "scene", None)
     if scene is not None and scene.penumbra.visibility.gpu_preview:
         update(scene)
@@ -521,5 +520,6 @@ def unregister():
     _mesh_buffers.clear()
     _uniform_cache.clear()
     _geometry_grids.clear()
+    enabled_objects.forget()
     _shaders.clear()
     gpu_model._shaders.clear()

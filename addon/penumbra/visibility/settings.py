@@ -11,7 +11,8 @@ from ..core_settings import limits
 
 def _refresh(self, context):
     # Late import: frame_shading imports this module.
-    from . import frame_shading, gpu_preview
+    from . import enabled_objects, frame_shading, gpu_preview
+    enabled_objects.forget()  # `enabled` may be what changed
     frame_shading.request_refresh()
     gpu_preview.request_refresh()
 
