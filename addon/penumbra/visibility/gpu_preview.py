@@ -249,10 +249,6 @@ def _set_status(scene, message):
             print(f"penumbra: GPU preview: {message}")
 
 
-def _enabled_objects(scene):
-    return enabled_objects.in_scene(scene)
-
-
 def _shading_bytes(obj, scene, order, brdf, settings):
     """The shading uniform block, rebuilt only when its inputs changed (the
     operator blocks cost more than the rest of a frame's CPU work). The
@@ -303,11 +299,9 @@ def frame_of(obj, scene, depsgraph=None):
     return entry, frame
 
 
-def _forget_absent(scene, enabled=None):
-    """Drops what the preview holds for objects no longer enabled in the scene
-    (`enabled`: their names, where the caller has just walked them)."""
-    if enabled is None:
-        enabled = {obj.name for obj in _enabled_objects(scene)} if scene is not None else set()
+def _forget_absent(scene):
+    """Drops what the preview holds for objects no longer enabled in the scene."""
+    enabled = {obj.name for obj in enabled_objects.in_scene(scene)} if scene is not None else set()
     for name in [n for n in _previews if n not in enabled]:
         del _previews[name]
         _uniform_cache.pop(name, None)
@@ -331,7 +325,7 @@ def update(scene, depsgraph=None):
             _set_status(scene, reason)
             return
         seen, problems = set(), []
-        for obj in _enabled_objects(scene):
+        for obj in enabled_objects.in_scene(scene):
             seen.add(obj.name)
             try:
                 entry, frame = frame_of(obj, scene, depsgraph)
@@ -344,7 +338,7 @@ def update(scene, depsgraph=None):
                 preview.entry, preview.batch = entry, None
             preview.frame = frame
             last_timings = dict(frame.seconds)
-        _forget_absent(scene, seen)
+        _forget_absent(scene)
         if not seen:
             problems.append("no object has Shade from Model on")
         _set_status(scene, "; ".join(problems))
@@ -437,10 +431,9 @@ def _updated(depsgraph, kinds):
     return any(isinstance(u.id, kinds) for u in depsgraph.updates)
 
 
-def _armature_or_view_changed(scene, depsgraph):
-    relevant = _updated(depsgraph, world_lighting.EDITS_THAT_RELIGHT) or any(
-        isinstance(u.id, bpy.types.Object) and u.id.type == "CAMERA" for u in depsgraph.updates)
-    return relevant or frame_shading._drives_enabled_object(scene, depsgraph.updates)
+def _armature_or_camera_changed(scene, depsgraph):
+    camera = any(isinstance(u.id, bpy.types.Object) and u.id.type == "CAMERA" for u in depsgraph.updates)
+    return camera or frame_shading._drives_enabled_object(scene, depsgraph.updates)
 
 
 # frame_shading._busy: a bake is posing the scene frame by frame (frame_shading.paused),
@@ -457,12 +450,14 @@ def on_frame_change(scene, depsgraph=None):
 def on_depsgraph_update(scene, depsgraph):
     if _previews:  # an object deleted or switched off holds nothing on the GPU
         _forget_absent(scene)
-    # Not every Scene update relights: the timeline's cursor and the preview's own status are scene properties.
-    relit = _updated(depsgraph, ("Scene",)) and world_lighting.the_scene_changed(scene)
-    if _updated(depsgraph, world_lighting.EDITS_THAT_RELIGHT):
+    relit = _updated(depsgraph, world_lighting.EDITS_THAT_RELIGHT)
+    if relit:
         world_lighting.forget_reads()
+    else:
+        # Not every Scene update relights: the timeline's cursor and the preview's own status are scene properties.
+        relit = _updated(depsgraph, ("Scene",)) and world_lighting.the_scene_changed(scene)
     if scene.penumbra.visibility.gpu_preview and not frame_shading._busy and (
-            relit or _armature_or_view_changed(scene, depsgraph)):
+            relit or _armature_or_camera_changed(scene, depsgraph)):
         update(scene, depsgraph)
 
 
