@@ -262,7 +262,17 @@ def held_out_frames_lines(rows, alone=False):
               "on top (a Gaussian kernel over their R − I, as pose-space deformation does for shapes; its width "
               "and noise chosen on every 4th training frame) brings the interleaved split to mean 1.18, worst "
               "1.56 (from 1.23, 1.66) and leaves the block at mean 2.04, worst 3.11, for a model that would also "
-              "store every training frame's residual per vertex.", ""]
+              "store every training frame's residual per vertex.", "",
+              "Nor does baking poses the motion did not hold (2026-11-29, the same bake and fit; poses made from "
+              "the split's training frames alone, keyed after the shot and baked with them; worst frame every 4th "
+              "/ last 16, against 1.69 / 2.88 in the same run): each joint's rotation taken from an independent "
+              "training frame, no rotation new (48 poses: 2.24 / 2.94; 16: 2.23 / 2.85); each joint pushed 1 to "
+              "2 times its distance from its mean training rotation (48: 2.91 / 3.27; 16: 2.58 / 2.96); each "
+              "training pose's joints turned about random axes by up to 5°, 15° or 30° (16 poses: 2.32 / 2.89; "
+              "48: 2.90 / 3.28 and 3.21 / 3.90). Every kind makes both splits worse, even joints only "
+              "recombined: the visibility is not a sum of one term per joint over poses the motion does not "
+              "hold, and a linear model fits the real motion through its joints' correlations. Covering more of "
+              "the pose space costs more on the shot's own poses than it gains on new ones.", ""]
     return lines
 
 
