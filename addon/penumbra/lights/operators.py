@@ -118,11 +118,11 @@ class _Job:
             self.frames = min(self.source.frame_count, wanted)
         if self.frames > 1 and self.fps <= 0.0:
             self.fps = self.scene.render.fps / self.scene.render.fps_base
-        # The fit assumes every sun casts a shadow unless only the 8 strongest do:
-        # then the shadowless majority is drawn as Cycles draws it.
+        # The fit assumes every sun casts a shadow unless only a few do: then
+        # the shadowless majority is drawn as Cycles draws it.
         self.eevee = rig_objects.targets_eevee(op.target_renderer, self.scene)
-        budget = rig_objects.shadow_budget_of(op.shadow_budget, op.limit_shadows)
-        self.sun_model = rig_objects.sun_model(eevee=self.eevee, shadow=budget == 0)
+        shadows = rig_objects.shadow_choice(op.shadow_budget, op.limit_shadows)
+        self.sun_model = rig_objects.sun_model(eevee=self.eevee, shadow=shadows.count == 0)
         self.builder = self.core.lights.RigBuilder(
             count=op.count, sampler=op.sampler, blue_noise=op.blue_noise, power=op.power, mapping=self.mapping,
             temporal_filter=op.temporal_filter, frames_per_second=self.fps, cluster_max=op.cluster_max,

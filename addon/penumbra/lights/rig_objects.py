@@ -11,6 +11,9 @@ a sun of angle ~1e-10 rad or less black), and the strength depends on how
 this Blender's Cycles draws a sun (docs/lights.md "Suns in Cycles"), which
 the core's sun_model_for_blender picks from bpy.app.version."""
 
+import collections
+import math
+
 import bpy
 import mathutils
 import numpy as np
@@ -90,29 +93,45 @@ def _set_keys(id_block, path, index, frames, values):
     fc.update()
 
 
-# EEVEE Legacy's cascaded shadow maps go to at most this many suns; the
-# alias limit_shadows is a shadow budget of this many.
+# EEVEE Legacy's cascaded shadow maps go to at most this many suns;
+# limit_shadows gives shadows to this many strongest suns.
 LEGACY_SHADOWED_SUNS = 8
 
+# A sun casts an umbra behind an occluder only where the occluder looks wider
+# than the sun. Seen from a receiver one occluder-width below it, the
+# occluder spans 2·atan(1/2) ≈ 53.13°: a wider sun's shadow is penumbra from
+# that distance on, a darkening without a shape, so a shadow budget goes to
+# suns at most this wide (docs/lights.md, "Shadow budget").
+UMBRA_ANGLE = 2.0 * math.atan(0.5)
 
-def shadow_budget_of(shadow_budget, limit_shadows):
-    """The suns that may cast a shadow (0: every sun): `shadow_budget`, or
-    LEGACY_SHADOWED_SUNS when only the alias limit_shadows asks for a limit."""
+# count: the suns that may cast a shadow (0: every sun); sharp_only: chosen
+# only among suns no wider than UMBRA_ANGLE.
+ShadowChoice = collections.namedtuple("ShadowChoice", "count sharp_only")
+
+
+def shadow_choice(shadow_budget, limit_shadows):
+    """The suns that cast shadows: `shadow_budget` > 0, that many of the
+    strongest sharp suns; else limit_shadows, the LEGACY_SHADOWED_SUNS
+    strongest of any width (its contract since 0.2); else every sun."""
     if shadow_budget > 0:
-        return int(shadow_budget)
-    return LEGACY_SHADOWED_SUNS if limit_shadows else 0
+        return ShadowChoice(int(shadow_budget), True)
+    return ShadowChoice(LEGACY_SHADOWED_SUNS if limit_shadows else 0, False)
 
 
-def shadowed_indices(mean_power, limit=LEGACY_SHADOWED_SUNS):
-    """Indices of the `limit` strongest lights by mean power (ties: lower index)."""
+def shadowed_indices(mean_power, limit=LEGACY_SHADOWED_SUNS, angle=None):
+    """Indices of the `limit` strongest lights by mean power (ties: lower
+    index); with `angle` (radians per light), only among those no wider than
+    UMBRA_ANGLE."""
     order = np.argsort(-np.asarray(mean_power, dtype=float), kind="stable")
+    if angle is not None:
+        order = [k for k in order if angle[k] <= UMBRA_ANGLE]
     return set(int(k) for k in order[:limit])
 
 
 class _Values:
     """Everything the suns get, computed and checked before the .blend is touched."""
 
-    def __init__(self, rig, frame_start, budget, eevee=False):
+    def __init__(self, rig, frame_start, shadows, eevee=False):
         self.slots = int(rig["slots"])
         rgb = np.asarray(rig["rgb"], dtype=float)              # (F, S, 3)
         directions = np.asarray(rig["directions"], dtype=float)
@@ -130,8 +149,10 @@ class _Values:
         self.colour = np.where(peak[..., None] > 0, rgb / np.maximum(peak[..., None], 1e-30), 1.0)
         lights = native.require().lights
         self.angle = lights.sun_angle(spread)
-        strongest = shadowed_indices(power.mean(axis=0), budget)
-        self.shadow = [(k in strongest) if budget > 0 else True for k in range(self.slots)]
+        # A sun's width over the shot, as its power weighs the frames.
+        width = (self.angle * power).sum(axis=0) / np.maximum(power.sum(axis=0), 1e-30)
+        chosen = shadowed_indices(power.mean(axis=0), shadows.count, width if shadows.sharp_only else None)
+        self.shadow = [(k in chosen) if shadows.count > 0 else True for k in range(self.slots)]
         # EEVEE Legacy gives a sun another power per strength than Cycles does;
         # EEVEE Next the same, shadowed or not (docs/lights.md, "Suns in EEVEE").
         models = [sun_model(eevee=eevee, shadow=self.shadow[k]) for k in range(self.slots)]
@@ -233,13 +254,13 @@ class _Snapshot:
 def write_rig(scene, settings, rig, frame_start, limit_shadows, eevee=False, shadow_budget=0):
     """Creates or updates the collection, root and suns from `rig` (the dict of
     _penumbra.lights.RigBuilder.finish) with keyframes from frame_start;
-    only the `shadow_budget` strongest suns cast a shadow (0: every sun;
-    limit_shadows, its alias, is a budget of 8).
+    the suns that cast a shadow are shadow_choice's: the `shadow_budget`
+    strongest sharp suns, or with limit_shadows the 8 strongest, else all.
 
     All or nothing: the values are computed and checked first; if anything
     fails while the .blend is being changed, what was created is removed and
     what was changed is put back before the error propagates."""
-    values = _Values(rig, frame_start, shadow_budget_of(shadow_budget, limit_shadows), eevee)
+    values = _Values(rig, frame_start, shadow_choice(shadow_budget, limit_shadows), eevee)
     snapshot = _Snapshot(scene, settings)
     try:
         coll = settings.collection

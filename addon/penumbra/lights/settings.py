@@ -75,8 +75,8 @@ class LightRigSceneSettings(bpy.types.PropertyGroup):
         description="Only the 8 strongest suns cast shadows (EEVEE Legacy's limit)")
     shadow_budget: bpy.props.IntProperty(
         name="Shadow Budget", default=0, min=0,
-        description="Only this many strongest suns cast shadows (0: every sun; Shadows for 8 Strongest is a "
-                    "budget of 8)")
+        description="Only this many suns cast shadows: the strongest of those sharp enough to cast a visible "
+                    "shadow, at most 53° wide (0: every sun, or Shadows for 8 Strongest)")
     target_renderer: bpy.props.EnumProperty(
         name="Target Renderer", items=TARGET_RENDERER_ITEMS, default="SCENE",
         description="The renderer the suns are fitted for (docs/lights.md, \"Suns in EEVEE\")")

@@ -525,13 +525,28 @@ def test_shadow_limit_gives_shadows_to_the_eight_strongest(addon, tmp_path):
     assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, limit_shadows=False,
                                             json_path=json_path) == {"FINISHED"}
     assert all(o.data.use_shadow for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT")
-    # The named budget: its own count, and limit_shadows is a budget of 8.
+
+
+def test_shadow_budget_gives_shadows_to_the_strongest_sharp_suns(addon, tmp_path):
+    """shadow_budget N: the N strongest of the suns narrow enough to cast an
+    umbra behind an occluder one occluder-width above the receiver (angle at
+    most 2·atan(1/2)); a wider sun, however strong, keeps no shadow."""
+    scene = addon
+    path = write_map(str(tmp_path / "map.exr"), sky_and_sun(h=32, w=64, sky=0.2))
+    json_path = str(tmp_path / "s.json")
     assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, shadow_budget=3,
                                             json_path=json_path) == {"FINISHED"}
+    from penumbra.lights.rig_objects import INDEX_KEY
     suns = {int(o[INDEX_KEY]): o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"}
     doc = json.load(open(json_path))
+    y = np.array([0.2126, 0.7152, 0.0722])
     power = np.mean([[np.dot(l["rgb"], y) for l in f["lights"]] for f in doc["frames"]], axis=0)
-    assert sorted(k for k, o in suns.items() if o.data.use_shadow) == sorted(np.argsort(-power)[:3].tolist())
+    umbra = 2.0 * math.atan(0.5)
+    sharp = [int(k) for k in np.argsort(-power, kind="stable") if suns[int(k)].data.angle <= umbra]
+    shadowed = sorted(k for k, o in suns.items() if o.data.use_shadow)
+    assert shadowed == sorted(sharp[:3])
+    # The map makes the rule matter: a wide sun outranks a shadowed one.
+    assert any(o.data.angle > umbra and power[k] > min(power[shadowed]) for k, o in suns.items())
 
 
 def test_fit_irradiance_makes_the_suns_as_drawn_closer_to_the_maps_irradiance(addon, tmp_path):
