@@ -25,8 +25,9 @@ and its pictures (docs/lights/eevee_<blender>_<scene>_*.png):
     .venv/bin/python bench/lights_eevee_benchmark.py [--blenders 3.4,5.2,4.5] [--time-limit S] [--resume]
         [--section-only] [--lock /work/bench.lock]
 
-Each Blender's result is kept in OUT/result_<blender>.json; the section is
-written from every result there, so Blenders run apart publish together.
+Each Blender's result is kept in docs/lights/eevee-results/result_<blender>.json
+(committed); the section is written from every result there, so Blenders run
+apart, in any session, publish together.
 --time-limit S stops a Blender after S seconds and publishes the renders it
 finished (goal 2 on every scene first); --resume then renders only the rest
 (delete a render's .json in OUT/<blender> to render it again).
@@ -49,6 +50,7 @@ from bench.helpers.paths import BUILD, ROOT, compiled_core  # noqa: E402
 DOC = os.path.join(ROOT, "docs", "lights-benchmark.md")
 RENDER = os.path.join(ROOT, "bench", "blender_scripts", "lights_eevee_render.py")
 PICTURES = os.path.join(ROOT, "docs", "lights")
+RESULTS = os.path.join(PICTURES, "eevee-results")
 QUICK = os.environ.get("PENUMBRA_BENCH_QUICK") == "1"
 OUT = os.path.join(BUILD, "bench", "lights_eevee_quick" if QUICK else "lights_eevee")
 # In the order rendered (a run stopped at its time limit has the first ones).
@@ -315,7 +317,8 @@ def section(results):
     ] + extraction if extraction else []) + [
         "",
         f"**Shadow budget** (issue #26 item 3): the {GOAL2_COUNT}-sun rig with every sun shadowed against "
-        f"`shadow_budget={SHADOW_BUDGET}` (the suns that carry the visible shadows keep theirs). EEVEE Legacy "
+        f"`shadow_budget={SHADOW_BUDGET}`: the {SHADOW_BUDGET} strongest of the suns sharp enough to cast a "
+        "visible shadow (at most 2·atan(1/2) ≈ 53° wide, docs/lights.md) keep theirs. EEVEE Legacy "
         "grants cascaded shadow maps to at most 8 suns in any case. Each pair is rendered back to back; render "
         "times are single renders on the shared machine: differences of a few percent are noise.",
         "",
@@ -329,10 +332,16 @@ def section(results):
     return "\n".join(lines) + "\n"
 
 
+def result_path(tag):
+    """Where a Blender's result is kept: beside the page (committed), so that
+    Blenders run in different sessions publish together; a quick run's in OUT."""
+    return os.path.join(OUT if QUICK else RESULTS, f"result_{tag}.json")
+
+
 def stored_results():
     found = []
     for tag in BLENDERS:
-        path = os.path.join(OUT, f"result_{tag}.json")
+        path = result_path(tag)
         if os.path.exists(path):
             with open(path) as f:
                 found.append(json.load(f))
@@ -353,8 +362,10 @@ def main():
             out = os.path.join(OUT, tag)
             os.makedirs(out, exist_ok=True)
             result = run_blender(tag, out, time_limit)
-            with open(os.path.join(OUT, f"result_{tag}.json"), "w") as f:
+            os.makedirs(os.path.dirname(result_path(tag)), exist_ok=True)
+            with open(result_path(tag) + ".tmp", "w") as f:
                 json.dump(result, f, indent=1)
+            os.replace(result_path(tag) + ".tmp", result_path(tag))
             print(f"Blender {tag}: {result['seconds']:.0f} s", flush=True)
             if not QUICK:
                 copy_pictures(result, out)
