@@ -79,7 +79,9 @@ class LightRigSceneSettings(bpy.types.PropertyGroup):
                     "shadow, at most 53° wide (0: every sun, or Shadows for 8 Strongest)")
     target_renderer: bpy.props.EnumProperty(
         name="Target Renderer", items=TARGET_RENDERER_ITEMS, default="SCENE",
-        description="The renderer the suns are fitted for (docs/lights.md, \"Suns in EEVEE\")")
+        description="The renderer the suns are fitted for (docs/lights.md, \"Suns in EEVEE\"). EEVEE Next "
+                    "bounces the suns' light between objects only with Ray Tracing on (Render Properties) or "
+                    "baked light probes")
     json_path: bpy.props.StringProperty(name="JSON", default="//penumbra_light_rig.json", subtype="FILE_PATH",
                                         options=compat.BLEND_RELATIVE_PATH,
                                         description="Per-frame lights for game engines, written beside the .blend")
