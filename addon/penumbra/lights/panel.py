@@ -5,7 +5,7 @@ read, how lights are sampled, and what is written, in sub-panels."""
 import bpy
 
 from .. import sidebar
-from . import operators
+from . import operators, rig_objects
 
 
 def _split(layout):
@@ -90,6 +90,17 @@ class PENUMBRA_PT_light_rig_output(_SubPanel, bpy.types.Panel):
         if bpy.app.version < (4, 2, 0):
             sidebar.draw_wrapped(layout, context, "EEVEE Legacy draws at most 128 lights and 8 shadowed suns: "
                                  "limit shadows, or keep Lights at 128 or fewer", icon="INFO")
+        elif missing_bounce_light(context.scene, s.target_renderer):
+            sidebar.draw_wrapped(layout, context, "Ray Tracing is off: EEVEE gives the suns' light no bounce "
+                                 "between objects (Render Properties)", icon="INFO")
+
+
+def missing_bounce_light(scene, target_renderer):
+    """Whether the rig is for EEVEE Next with Ray Tracing off: then its suns'
+    light bounces nowhere, which Cycles' would (docs/lights.md, "Ray tracing
+    gives back the bounce light")."""
+    return (bpy.app.version >= (4, 2, 0) and rig_objects.targets_eevee(target_renderer, scene)
+            and not scene.eevee.use_raytracing)
 
 
 classes = (PENUMBRA_PT_light_rig, PENUMBRA_PT_light_rig_source, PENUMBRA_PT_light_rig_sampling,

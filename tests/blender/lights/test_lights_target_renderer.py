@@ -55,3 +55,38 @@ def test_an_explicit_target_overrides_the_scenes_engine(addon, tmp_path):
     np.testing.assert_allclose([o.data.energy for o in _suns(scene)], for_eevee, rtol=1e-6)
     _build(path, tmp_path, target_renderer="CYCLES")
     assert not np.allclose([o.data.energy for o in _suns(scene)], for_eevee, rtol=1e-3)
+
+
+def _output_panel_labels(context):
+    """The texts of the labels the Output sub-panel draws (its draw() run on
+    test_panel_labels' recording layout)."""
+    from test_panel_labels import Node, Recorder, _PanelSelf
+    root = Node("root")
+    bpy.types.PENUMBRA_PT_light_rig_output.draw(_PanelSelf(Recorder(root)), context)
+    texts, nodes = [], [root]
+    while nodes:
+        node = nodes.pop()
+        for child in getattr(node, "children", ()):
+            nodes.append(child)
+            if getattr(child, "kind", "") == "label":
+                texts.append(child.text)
+    return " ".join(texts)
+
+
+def test_the_panel_says_when_eevee_next_gives_the_rig_no_bounce_light(addon):
+    # docs/lights.md, "Ray tracing gives back the bounce light": without Ray
+    # Tracing, EEVEE Next's rig lacks the light Cycles bounces between objects.
+    scene, s = addon, addon.penumbra.light_rig
+    scene.render.engine = _eevee_engine()
+    for target, tracing, shown in (("SCENE", False, True), ("EEVEE", False, True), ("CYCLES", False, False),
+                                   ("SCENE", True, False), ("EEVEE", True, False)):
+        s.target_renderer = target
+        if bpy.app.version >= (4, 2, 0):
+            scene.eevee.use_raytracing = tracing
+        expected = shown and bpy.app.version >= (4, 2, 0)  # EEVEE Legacy has no Ray Tracing to turn on
+        assert ("Ray Tracing is off" in _output_panel_labels(bpy.context)) == expected, (target, tracing)
+    scene.render.engine = "CYCLES"
+    s.target_renderer = "SCENE"
+    if bpy.app.version >= (4, 2, 0):
+        scene.eevee.use_raytracing = False
+    assert "Ray Tracing is off" not in _output_panel_labels(bpy.context)
