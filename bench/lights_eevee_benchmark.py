@@ -304,7 +304,7 @@ def section(results):
         "",
         f"**Goal 1**: mean luminance / the reference's (goal: within {GOAL1_TOLERANCE:.0%}); EEVEE's World render "
         "beside it. EEVEE draws no bounce light from lamps (no baked probes, no ray tracing at factory "
-        "settings); the reference has bounces.",
+        "settings); the reference has bounces. With Ray Tracing on: \"EEVEE Next with ray tracing\" below.",
         "",
         "| Blender | scene | " + " | ".join(f"rig, {n} suns" for n in COUNTS) + " | EEVEE World alone | within |",
         "|---|---|" + "---:|" * (len(COUNTS) + 1) + "---|",
