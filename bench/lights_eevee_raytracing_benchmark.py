@@ -7,7 +7,10 @@ on, and on with a finer Fast GI (bench/blender_scripts/lights_eevee_raytracing.p
 Keeps each Blender's result in docs/lights/eevee-results/raytracing_<blender>.json
 and writes the section "EEVEE Next with ray tracing" of docs/lights-benchmark.md:
 
-    .venv/bin/python bench/lights_eevee_raytracing_benchmark.py [--blenders 5.2,4.5] [--section-only]"""
+    .venv/bin/python bench/lights_eevee_raytracing_benchmark.py [--blenders 5.2,4.5] [--section-only]
+
+PENUMBRA_BENCH_QUICK=1: the EEVEE benchmark's quick scenes and results (a
+smoke test, not a result; run that benchmark quick first)."""
 
 import json
 import os
@@ -18,7 +21,8 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
 from bench.helpers.doc_section import write_section  # noqa: E402
 from bench.helpers.paths import ROOT  # noqa: E402
-from bench.lights_eevee_benchmark import BLENDERS, DOC, GOAL2_COUNT, OUT, RESULTS, variant_label  # noqa: E402
+from bench.lights_eevee_benchmark import (  # noqa: E402
+    BLENDERS, DOC, GOAL2_COUNT, OUT, QUICK, result_path, variant_label)
 
 SCRIPT = os.path.join(ROOT, "bench", "blender_scripts", "lights_eevee_raytracing.py")
 TAGS = ("4.5", "5.2")  # EEVEE Next: 3.4's EEVEE Legacy has no ray tracing
@@ -28,7 +32,8 @@ LIGHTING = (("baseline", "baseline"), ("rig", f"rig, {GOAL2_COUNT} suns"), ("bud
 
 
 def stored_path(tag):
-    return os.path.join(RESULTS, f"raytracing_{tag}.json")
+    """Beside the EEVEE benchmark's result (committed; a quick run's in its OUT)."""
+    return os.path.join(os.path.dirname(result_path(tag)), f"raytracing_{tag}.json")
 
 
 def run_blender(tag):
@@ -92,7 +97,7 @@ def section(results):
     errors, means = zip(*(rows(r) for r in results)) if results else ((), ())
     columns = " | ".join(f"{light_label}: {trace_label}" for _, light_label in LIGHTING for _, trace_label in TRACING)
     return "\n".join([
-        "", MARKER.strip(), "",
+        "", MARKER.strip() + (" (QUICK SMOKE TEST, NOT A RESULT)" if QUICK else ""), "",
         "Written by `bench/lights_eevee_raytracing_benchmark.py`. Outside issue #26's goals, which judge EEVEE at "
         "factory settings with only the rig's own lights set by the operator: what a user gains by turning on "
         "**Ray Tracing** (Render Properties; `scene.eevee.use_raytracing`) for the rig. With it, EEVEE Next "

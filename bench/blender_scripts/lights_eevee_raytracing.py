@@ -7,9 +7,9 @@ tracing and Fast GI settings: screen trace, Fast GI "Global Illumination")
 and on with a finer Fast GI (full resolution, 16 steps, quality 1): the
 World alone, the benchmark's baseline for the scene (its best World render,
 from docs/lights/eevee-results/result_<blender>.json), the default 32-sun
-rig for EEVEE and the same rig with `shadow_budget` 8. With ray tracing on, lamp light bounces in screen space,
-which the reference (Cycles with default bounces) has and factory EEVEE
-lacks. Prints "RESULT {json}":
+rig for EEVEE and the same rig with `shadow_budget` 8. With ray tracing on,
+lamp light bounces in screen space, which the reference (Cycles with
+default bounces) has and factory EEVEE lacks. Prints "RESULT {json}":
 
     .venv/bin/python bench/blender_scripts/lights_eevee_raytracing.py OUT CACHE OPPOSITE
     .venv313/bin/python bench/blender_scripts/lights_eevee_raytracing.py OUT CACHE OPPOSITE
