@@ -80,9 +80,9 @@ def _slow(progress, until_cancelled=False):
     return 7
 
 
-def _start_probe(work):
+def _start_probe(work, on_step=None):
     """Invokes the probe as a click does; returns the job, which no step has touched yet."""
-    job = probe.ProbeJob(work)
+    job = probe.ProbeJob(work, on_step)
     probe.SETUP["job"] = lambda: job
     before = probe.state()
     assert _in_3d_view(lambda: bpy.ops.penumbra_test.modal_job_probe("INVOKE_DEFAULT")) == {"RUNNING_MODAL"}
@@ -101,26 +101,28 @@ def test_the_timer_moves_a_job_through_its_steps_and_its_worker(probe_op):
             gate.clear()
         return 7
 
-    before = on_main(probe.state)
-    job = on_main(lambda: _start_probe(gated))
-    seen = []
+    # Each main-thread step notes the fraction it starts from and how many
+    # turns Blender's loop has made (an app timer run every turn counts them):
+    # read on the main thread as the steps run, so no polling can miss a step.
+    turns, steps = [0], []
 
-    def moved_past(fraction):
-        if not _running():
-            return True
-        if not seen or seen[-1] != job.fraction:
-            seen.append(job.fraction)
-        return job.fraction > fraction
+    def count_turn():
+        turns[0] += 1
+        return 0.0 if _running() or not steps else None
+
+    before = on_main(probe.state)
+    on_main(lambda: bpy.app.timers.register(count_turn, first_interval=0.0))
+    job = on_main(lambda: _start_probe(gated, on_step=lambda job, k: steps.append((job.fraction, turns[0]))))
 
     # The steps' half, one main-thread step a timer tick, then the worker's.
-    for fraction in (0.0, 1 / 6, 2 / 6, 0.5):
-        wait_until(lambda: moved_past(fraction), timeout=30)
+    wait_until(lambda: job.fraction >= 0.5 or not _running(), timeout=30)
     for fraction in (0.625, 0.75, 0.875):
         wait_until(lambda: job.fraction >= fraction, timeout=30)
         assert on_main(_running) == [job]  # Blender's loop turns while the worker runs
         gate.set()
     wait_until(lambda: not _running(), timeout=30)
-    assert seen[:3] == pytest.approx([1 / 6, 2 / 6, 0.5]), seen
+    assert [f for f, _ in steps] == pytest.approx([0.0, 1 / 6, 2 / 6]), steps
+    assert all(a < b for (_, a), (_, b) in zip(steps, steps[1:])), f"two steps in one turn of the loop: {steps}"
     assert job.worker_threads and job.worker_threads[0] != on_main(threading.get_ident)
     assert on_main(lambda: bpy.data.objects[probe.RESULT]["value"]) == 7
     assert on_main(probe.state)[0] == before[0] and job.failures == []
