@@ -69,10 +69,11 @@ ANGLES = (1, 10)  # world.sun_angle, degrees
 SHADOW_BUDGET = 8
 PICTURE_SCENES = ("sunrise", "opposite")
 MARKER = "\n## Shadowed comparison (EEVEE)"
+# How each Blender runs a script: the command before the script, and after it.
 BLENDERS = {
-    "3.4": ["xvfb-run", "-a", "blender", "-b", "--factory-startup", "--python", RENDER, "--"],
-    "4.5": [os.path.join(ROOT, ".venv", "bin", "python"), RENDER],
-    "5.2": [os.path.join(ROOT, ".venv313", "bin", "python"), RENDER],
+    "3.4": (["xvfb-run", "-a", "blender", "-b", "--factory-startup", "--python"], ["--"]),
+    "4.5": ([os.path.join(ROOT, ".venv", "bin", "python")], []),
+    "5.2": ([os.path.join(ROOT, ".venv313", "bin", "python")], []),
 }
 
 
@@ -91,14 +92,17 @@ def opposite_map(path, width=1024):
     compiled_core().image.write_exr(path, image.astype(np.float32), False)
 
 
-def run_blender(tag, out, time_limit):
-    """One Blender's renders (bench/blender_scripts/lights_eevee_render.py);
-    stopped after `time_limit` seconds, its finished renders are the result
-    (`stopped`), and a later run with --resume renders only the rest."""
+def run_blender(tag, out, time_limit, script=RENDER):
+    """One Blender's renders (`script`, by default bench/blender_scripts/lights_eevee_render.py,
+    given OUT, the reference cache and the opposite map); stopped after
+    `time_limit` seconds, its finished renders are the result (`stopped`),
+    and a later run with --resume renders only the rest."""
     cache = os.path.join(OUT, "references", tag)
     os.makedirs(cache, exist_ok=True)
-    command = ["nice", "-n", "5"] + BLENDERS[tag] + [out, cache, os.path.join(OUT, "opposite.exr")]
-    log = os.path.join(OUT, f"log_{tag}.txt")  # each render's line as it comes: a long run can be followed
+    before, after = BLENDERS[tag]
+    command = ["nice", "-n", "5"] + before + [script] + after + [out, cache, os.path.join(OUT, "opposite.exr")]
+    stem = os.path.splitext(os.path.basename(script))[0]
+    log = os.path.join(OUT, f"log_{stem}_{tag}.txt")  # each render's line as it comes: a long run can be followed
     env = dict(os.environ, GALLIVM_PERF="nopt", LP_NUM_THREADS="2")
     earlier, earlier_load = 0.0, []  # the stopped run's, its renders reused
     if "--resume" in sys.argv:

@@ -14,15 +14,13 @@ smoke test, not a result; run that benchmark quick first)."""
 
 import json
 import os
-import subprocess
 import sys
-import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
 from bench.helpers.doc_section import write_section  # noqa: E402
 from bench.helpers.paths import ROOT  # noqa: E402
 from bench.lights_eevee_benchmark import (  # noqa: E402
-    BLENDERS, DOC, GOAL2_COUNT, OUT, QUICK, result_path, variant_label)
+    DOC, GOAL2_COUNT, OUT, QUICK, result_path, run_blender, variant_label)
 
 SCRIPT = os.path.join(ROOT, "bench", "blender_scripts", "lights_eevee_raytracing.py")
 TAGS = ("4.5", "5.2")  # EEVEE Next: 3.4's EEVEE Legacy has no ray tracing
@@ -34,21 +32,6 @@ LIGHTING = (("baseline", "baseline"), ("rig", f"rig, {GOAL2_COUNT} suns"), ("bud
 def stored_path(tag):
     """Beside the EEVEE benchmark's result (committed; a quick run's in its OUT)."""
     return os.path.join(os.path.dirname(result_path(tag)), f"raytracing_{tag}.json")
-
-
-def run_blender(tag):
-    out = os.path.join(OUT, f"raytracing_{tag}")
-    os.makedirs(out, exist_ok=True)
-    command = ["nice", "-n", "5", BLENDERS[tag][0], SCRIPT, out, os.path.join(OUT, "references", tag),
-               os.path.join(OUT, "opposite.exr")]
-    env = dict(os.environ, GALLIVM_PERF="nopt", LP_NUM_THREADS="2")
-    env.pop("PYTHONPATH", None)
-    text = subprocess.run(command, capture_output=True, text=True, env=env).stdout
-    lines = [x for x in text.splitlines() if x.startswith("RESULT ")]
-    result = json.loads(lines[-1][len("RESULT "):]) if lines else {"ok": False}
-    if not result["ok"]:
-        sys.exit(f"the renders in Blender {tag} failed: {result.get('error', text[-3000:])}")
-    return dict(result, date=time.strftime("%Y-%m-%d %H:%M"))
 
 
 def rows(result):
@@ -144,7 +127,9 @@ def main():
     argv = sys.argv
     tags = argv[argv.index("--blenders") + 1].split(",") if "--blenders" in argv else list(TAGS)
     for tag in ([] if "--section-only" in argv else tags):
-        result = run_blender(tag)
+        out = os.path.join(OUT, f"raytracing_{tag}")
+        os.makedirs(out, exist_ok=True)
+        result = run_blender(tag, out, None, SCRIPT)
         with open(stored_path(tag) + ".tmp", "w") as f:
             json.dump(result, f, indent=1)
         os.replace(stored_path(tag) + ".tmp", stored_path(tag))
