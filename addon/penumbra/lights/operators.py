@@ -15,7 +15,7 @@ import bpy
 import numpy as np
 
 from .. import color, compat, modal_job, native, world
-from . import rig_objects, settings
+from . import rig_objects, settings, shadow_pool
 from ..core_settings import limits
 
 PREVIEW_NAME = "Penumbra Light Rig Preview"
@@ -215,11 +215,14 @@ class _Job:
         msg = (f"{rig['slots']} lights over {len(rig['defects'])} frame(s) in '{collection.name}'; JSON: {json_path}")
         if s.adaptive_count > 0:
             msg += f"; adaptive: {s.adaptive_count} suns, error {100.0 * s.adaptive_error:.2f} %"
+        overflow = shadow_pool.overflow_warning(self.scene, op.target_renderer, shadow_pool.shadowed_suns(collection))
+        if overflow:
+            msg += "; " + overflow
         if bad:
             msg += (f"; replaced {defects['nan']} NaN, {defects['inf']} Inf and {defects['negative']} "
                     "negative pixel values by 0")
         s.last_report = msg[:250]
-        return msg, bad
+        return msg, bool(bad or overflow)
 
     @staticmethod
     def store_adaptive(settings_, rig):
@@ -323,8 +326,8 @@ class _RigBuild(modal_job.Job):
         rig = self.rig
         while not rig.step():
             yield rig.done / rig.frames
-        msg, bad = rig.apply()
-        return [("WARNING" if bad else "INFO", msg)]
+        msg, warn = rig.apply()
+        return [("WARNING" if warn else "INFO", msg)]
 
 
 classes = (PENUMBRA_OT_build_light_rig,)

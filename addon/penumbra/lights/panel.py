@@ -5,7 +5,7 @@ read, how lights are sampled, and what is written, in sub-panels."""
 import bpy
 
 from .. import sidebar
-from . import operators, rig_objects
+from . import operators, rig_objects, shadow_pool
 
 
 def _split(layout):
@@ -93,6 +93,10 @@ class PENUMBRA_PT_light_rig_output(_SubPanel, bpy.types.Panel):
         elif missing_bounce_light(context.scene, s.target_renderer):
             sidebar.draw_wrapped(layout, context, "Ray Tracing is off: EEVEE gives the suns' light no bounce "
                                  "between objects (Render Properties)", icon="INFO")
+        overflow = shadow_pool.overflow_warning(context.scene, s.target_renderer,
+                                                shadow_pool.shadowed_suns(s.collection))
+        if overflow:
+            sidebar.draw_wrapped(layout, context, overflow, icon="ERROR")
 
 
 def missing_bounce_light(scene, target_renderer):

@@ -90,3 +90,31 @@ def test_the_panel_says_when_eevee_next_gives_the_rig_no_bounce_light(addon):
     if bpy.app.version >= (4, 2, 0):
         scene.eevee.use_raytracing = False
     assert "Ray Tracing is off" not in _output_panel_labels(bpy.context)
+
+
+def test_a_rig_for_eevee_next_says_when_its_shadows_may_not_fit_the_shadow_pool(addon, tmp_path):
+    # docs/lights.md, "EEVEE Next's shadow pool": 64 shadowed suns overflowed
+    # the factory 512 MB pool in every scene of the EEVEE benchmark, and
+    # EEVEE dropped shadows; 32 fit.
+    from penumbra.lights import shadow_pool
+    scene, s = addon, addon.penumbra.light_rig
+    scene.render.engine = _eevee_engine()
+    path = write_map(str(tmp_path / "map.exr"), sky_and_sun(radius=0.6))
+    said = "EEVEE's shadow pool"
+    for count, budget, shown in ((40, 0, True), (32, 0, False), (40, 8, False)):
+        r = bpy.ops.penumbra.build_light_rig(filepath=path, count=count, shadow_budget=budget,
+                                             json_path=str(tmp_path / "rig.json"))
+        assert r == {"FINISHED"}, r
+        if budget == 0:
+            assert shadow_pool.shadowed_suns(s.collection) == count
+        expected = shown and bpy.app.version >= (4, 2, 0)  # EEVEE Legacy has no pool (its limit: 8 suns)
+        assert (said in _output_panel_labels(bpy.context)) == expected, (count, budget)
+        assert (said in s.last_report) == expected, (count, budget, s.last_report)
+    if bpy.app.version >= (4, 2, 0):
+        bpy.ops.penumbra.build_light_rig(filepath=path, count=40, json_path=str(tmp_path / "rig.json"))
+        assert "shadow pool (512 MB) holds about 32" in _output_panel_labels(bpy.context)
+        scene.eevee.shadow_pool_size = "1024"  # the user's fix: the pool then holds 64
+        assert said not in _output_panel_labels(bpy.context)
+        scene.eevee.shadow_pool_size = "512"
+        s.target_renderer = "CYCLES"  # Cycles has no pool
+        assert said not in _output_panel_labels(bpy.context)
