@@ -65,15 +65,19 @@ class Renderer:
         return self.core.image.read(stem + ".exr") @ LUMINANCE
 
 
-def reference(render, cache, name):
+def reference(render, cache, name, direct=False):
     """The mean of Cycles' World render at seeds 1 and 2, from CACHE when
     rendered before; samples double from REFERENCE_SPP while the two seeds
-    differ by NOISE_LIMIT or more. Returns (luminance, facts)."""
-    spp = REFERENCE_SPP
+    differ by NOISE_LIMIT or more. `direct`: Cycles' direct light only (no
+    bounce, as EEVEE at factory settings draws lamps), cached apart.
+    Returns (luminance, facts)."""
+    spp, kind = REFERENCE_SPP, "_direct" if direct else ""
+    if direct:
+        render.scene.cycles.max_bounces = 0
     while True:
         lumas, seconds = [], 0.0
         for seed in (1, 2):
-            stem = os.path.join(cache, f"{name}_{WIDTH}x{HEIGHT}_{spp}spp_seed{seed}")
+            stem = os.path.join(cache, f"{name}_{WIDTH}x{HEIGHT}_{spp}spp{kind}_seed{seed}")
             if os.path.exists(stem + ".exr"):
                 lumas.append(render.read(stem))
                 continue
@@ -85,7 +89,7 @@ def reference(render, cache, name):
             seconds += took
         noise = float(np.sqrt(np.mean((lumas[0] - lumas[1]) ** 2)) / np.mean(lumas[0]))
         if noise < NOISE_LIMIT or spp >= MAX_REFERENCE_SPP:
-            picture = os.path.join(cache, f"{name}_{WIDTH}x{HEIGHT}_{spp}spp_seed1.png")
+            picture = os.path.join(cache, f"{name}_{WIDTH}x{HEIGHT}_{spp}spp{kind}_seed1.png")
             return (lumas[0] + lumas[1]) / 2, {"spp": spp, "noise": noise, "seconds": seconds, "picture": picture}
         spp *= 2
 
