@@ -273,7 +273,10 @@ def section(results):
         "## Shadowed comparison (EEVEE)" + (" (QUICK SMOKE TEST, NOT A RESULT)" if QUICK else ""),
         "",
         f"Written by `bench/lights_eevee_benchmark.py` (issue #26, goals 1 and 2). Five scenes, each a sphere on a "
-        f"plane at {WIDTH}x{HEIGHT} with a transparent film, lit by Blender's bundled sunrise, courtyard, sunset "
+        f"plane at {WIDTH}x{HEIGHT} with a transparent film, both of one Principled BSDF at each Blender's "
+        "defaults (`examples/scenes/light_rig_scene.py: default_surface`: without a material, Cycles before 5.0 "
+        "draws a grey diffuse, EEVEE this), lit by "
+        "Blender's bundled sunrise, courtyard, sunset "
         "and night maps (each Blender's own files: 3.4's differ from 4.5's and 5.2's) and by `opposite`, a map the "
         "benchmark makes: a dim sky with two bright discs on opposite sides at 35° elevation. EEVEE: factory "
         f"settings except {EEVEE_SAMPLES} samples, every render of one Blender in one process, on Mesa's llvmpipe "

@@ -76,6 +76,26 @@ def seconds(results):
     return "; ".join(cells)
 
 
+def stale(result):
+    """Whether a Blender's run was measured against other references than
+    the EEVEE benchmark's current ones (rendered again since: their noise differs)."""
+    with open(result_path(result["tag"])) as f:
+        current = json.load(f)["scenes"]
+    return any(abs(e["reference"]["noise"] - current[name]["reference"]["noise"]) > 1e-9
+               for name, e in result["scenes"].items())
+
+
+def stale_note(results):
+    old = [r["blender"] for r in results if stale(r)]
+    if not old:
+        return []
+    return ["", f"**Not yet measured again: Blender {', '.join(old)}.** Its run above used the EEVEE benchmark's "
+            "earlier references, rendered before both objects were given one explicit surface (in Blender before "
+            "5.0 Cycles drew an object without a material as a grey diffuse, EEVEE as a Principled BSDF; section "
+            "\"Shadowed comparison (EEVEE)\"). Its figures compare those two surfaces and stand until this "
+            "benchmark runs again."]
+
+
 def section(results):
     errors, means = zip(*(rows(r) for r in results)) if results else ((), ())
     columns = " | ".join(f"{light_label}: {trace_label}" for _, light_label in LIGHTING for _, trace_label in TRACING)
@@ -93,6 +113,7 @@ def section(results):
         "",
         "Runs: " + "; ".join(f"Blender {r['blender']}: {r['seconds']:.0f} s, ended {r['date']} UTC, load average "
                              f"{min(r['load']):.1f}–{max(r['load']):.1f}" for r in results) + ".",
+    ] + stale_note(results) + [
         "",
         "Error against the reference (RMS of the luminance difference / its mean); the last column, the "
         "budget rig with the finer Fast GI over the best of the three baseline renders (issue #26 asks ≤ 0.5 "

@@ -1,7 +1,7 @@
 """What the EEVEE light-rig measurements share, inside a Blender: EEVEE's
 engine id in this Blender, a render's mean luminance and the maps a scene is
 lit by (issue #26: bench/blender_scripts/lights_single_sun.py,
-lights_eevee_goal1.py, lights_eevee_render.py and the make-test check
+lights_eevee_render.py and the make-test check
 tests/blender/lights_eevee_check.py)."""
 
 import os
@@ -21,8 +21,12 @@ def plane_seen_from_above(scene, width, height):
     """A 20 m plane at z = 0 seen from 5 m above through an orthographic
     camera 4 m wide, width × height px, Standard view, Cycles on the CPU
     without denoising."""
+    from bench.helpers.paths import use_addon
+    use_addon()
+    import light_rig_scene
     mesh = bpy.data.meshes.new("Plane")
     mesh.from_pydata([(-10, -10, 0), (10, -10, 0), (10, 10, 0), (-10, 10, 0)], [], [(0, 1, 2, 3)])
+    mesh.materials.append(light_rig_scene.default_surface())  # the surface Cycles and EEVEE both draw
     scene.collection.objects.link(bpy.data.objects.new("Plane", mesh))
     cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
     cam.data.type, cam.data.ortho_scale = "ORTHO", 4.0
