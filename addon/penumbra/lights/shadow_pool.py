@@ -12,7 +12,7 @@ import bpy
 from . import rig_objects
 
 PAGE_MB = 0.25  # one page: 256 x 256 texels of 32 bits, so the factory 512 MB holds 2048 pages
-# A sun's shadow took 43-58 pages in every scene of the EEVEE benchmark, at
+# A sun's shadow took 43-61 pages in every scene of the EEVEE benchmark, at
 # 96x72 and at 960x720 alike (it follows the view's depth, not its pixels);
 # rounded up, so the factory pool is said to hold 32 suns.
 PAGES_PER_SUN = 64
