@@ -23,7 +23,7 @@ import bpy
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))  # bench.helpers
-from bench.blender_scripts.lights_eevee_render import Renderer, native, penumbra, reference  # noqa: E402
+from bench.blender_scripts.lights_eevee_render import Renderer, reference, start_blender  # noqa: E402
 from bench.helpers.blender_result import report  # noqa: E402
 from bench.helpers.lights_eevee import bundled_map, light_by_map  # noqa: E402
 from bench.helpers.lights_render_scene import sunrise_sphere_scene  # noqa: E402
@@ -37,13 +37,20 @@ def against(luma, truth):
     return float(np.sqrt(np.mean((luma - truth) ** 2)) / mean), float(np.mean(luma)) / mean
 
 
-def measure_scene(name, keys, out, cache, map_path, core):
-    scene, _ = sunrise_sphere_scene(REFERENCE_SPP, EEVEE_SAMPLES)
+def scene_and_references(name, map_path, cache, core):
+    """The benchmark's scene `name` lit by its map, its Renderer, and its two
+    references: (strength, render, bounced, direct, the direct one's facts)."""
+    scene, strength = sunrise_sphere_scene(REFERENCE_SPP, EEVEE_SAMPLES)
     light_by_map(scene, map_path)
     scene.render.resolution_x, scene.render.resolution_y = WIDTH, HEIGHT
     render = Renderer(scene, core)
     bounced, _ = reference(render, cache, name)
     direct, facts = reference(render, cache, name, direct=True)
+    return strength, render, bounced, direct, facts
+
+
+def measure_scene(name, keys, out, cache, map_path, core):
+    _, render, bounced, direct, facts = scene_and_references(name, map_path, cache, core)
     entries = {"direct": {"spp": facts["spp"], "noise": facts["noise"], "seconds": facts["seconds"],
                           "mean": float(np.mean(direct)) / float(np.mean(bounced))}}
     for key in keys:
@@ -55,8 +62,7 @@ def measure_scene(name, keys, out, cache, map_path, core):
 
 
 def main(result, out, cache, opposite):
-    penumbra.register()
-    core = native.require()
+    core = start_blender()
     started = time.time()
     tag = f"{bpy.app.version[0]}.{bpy.app.version[1]}"
     with open(result_path(tag)) as f:

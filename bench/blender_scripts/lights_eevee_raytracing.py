@@ -28,7 +28,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))  # bench.helpers
 from bench.blender_scripts.lights_eevee_render import (  # noqa: E402
-    Renderer, build_rig, native, penumbra, reference, world_variants)
+    Renderer, build_rig, reference, start_blender, world_variants)
 from bench.helpers.blender_result import report  # noqa: E402
 from bench.helpers.lights_eevee import bundled_map, eevee_engine, light_by_map  # noqa: E402
 from bench.helpers.lights_render_scene import sunrise_sphere_scene  # noqa: E402
@@ -80,11 +80,7 @@ def render_scene(name, map_path, core, out, cache, baseline_key):
 
 
 def main(result, out, cache, opposite):
-    if bpy.app.version >= (5, 0, 0) and bpy.app.background:
-        import gpu
-        gpu.init()
-    penumbra.register()
-    core = native.require()
+    core = start_blender()
     os.makedirs(out, exist_ok=True)
     started = time.time()
     load = [os.getloadavg()[0]]

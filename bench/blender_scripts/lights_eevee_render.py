@@ -65,6 +65,16 @@ class Renderer:
         return self.core.image.read(stem + ".exr") @ LUMINANCE
 
 
+def start_blender():
+    """The add-on registered and its compiled core, with a GPU context for
+    EEVEE (bpy 5.x makes none in the background until asked)."""
+    if bpy.app.version >= (5, 0, 0) and bpy.app.background:
+        import gpu
+        gpu.init()
+    penumbra.register()
+    return native.require()
+
+
 def reference(render, cache, name, direct=False):
     """The mean of Cycles' World render at seeds 1 and 2, from CACHE when
     rendered before; samples double from REFERENCE_SPP while the two seeds
@@ -195,11 +205,7 @@ def warm_up(out, map_path):
 
 
 def main(result, out, cache, opposite):
-    if bpy.app.version >= (5, 0, 0) and bpy.app.background:
-        import gpu
-        gpu.init()  # bpy 5.x makes no GPU context in the background until asked
-    penumbra.register()
-    core = native.require()
+    core = start_blender()
     started = time.time()
     result.update(engine="EEVEE Next" if NEXT else "EEVEE Legacy", load=[os.getloadavg()[0]],
                   scenes={name: {} for name in SCENES})

@@ -20,16 +20,13 @@ import re
 import sys
 import tempfile
 
-import bpy
-import numpy as np
-
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))  # bench.helpers
-from bench.blender_scripts.lights_eevee_direct import against  # noqa: E402
-from bench.blender_scripts.lights_eevee_render import Renderer, build_rig, native, penumbra, reference  # noqa: E402
+from bench.blender_scripts.lights_eevee_direct import against, scene_and_references  # noqa: E402
+from bench.blender_scripts.lights_eevee_render import Renderer, build_rig, start_blender  # noqa: E402
 from bench.helpers.blender_result import report  # noqa: E402
 from bench.helpers.lights_eevee import bundled_map, eevee_engine, light_by_map  # noqa: E402
 from bench.helpers.lights_render_scene import sunrise_sphere_scene  # noqa: E402
-from bench.lights_eevee_benchmark import EEVEE_SAMPLES, HEIGHT, REFERENCE_SPP, SCENES, WIDTH  # noqa: E402
+from bench.lights_eevee_benchmark import HEIGHT, REFERENCE_SPP, SCENES, WIDTH  # noqa: E402
 
 OVERFLOW = re.compile(r"Shadow buffer full.*?\((\d+) / (\d+)\)")
 
@@ -75,12 +72,8 @@ def measure(render, stem, direct, bounced):
 
 
 def measure_scene(name, map_path, out, cache, core):
-    scene, strength = sunrise_sphere_scene(REFERENCE_SPP, EEVEE_SAMPLES)
-    light_by_map(scene, map_path)
-    scene.render.resolution_x, scene.render.resolution_y = WIDTH, HEIGHT
-    render = Renderer(scene, core)
-    bounced, _ = reference(render, cache, name)
-    direct, _ = reference(render, cache, name, direct=True)
+    strength, render, bounced, direct, _ = scene_and_references(name, map_path, cache, core)
+    scene = render.scene
     rows = {}
     for count in (32, 64):
         build_rig(strength, out, count)
@@ -109,11 +102,7 @@ def pages_at_full_size(map_path, out, core):
 
 
 def main(result, out, cache, opposite):
-    if bpy.app.version >= (5, 0, 0) and bpy.app.background:
-        import gpu
-        gpu.init()
-    penumbra.register()
-    core = native.require()
+    core = start_blender()
     os.makedirs(out, exist_ok=True)
     result.update(scenes={}, load=[os.getloadavg()[0]])
     for name in SCENES:

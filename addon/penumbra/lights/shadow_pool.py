@@ -2,8 +2,8 @@
 
 EEVEE Next keeps the shadow-map pages of every light in one pool of
 `scene.eevee.shadow_pool_size` MB. A frame that needs more pages prints
-"Shadow buffer full, may result in missing shadows" and drops some: suns
-whose shadows are dropped light the ground inside them. The pool is the
+"Shadow buffer full, may result in missing shadows" and drops some: a sun
+whose shadow is dropped lights the ground inside it. The pool is the
 user's render setting; the rig only says when its suns may not fit
 (docs/lights.md, "EEVEE Next's shadow pool")."""
 
