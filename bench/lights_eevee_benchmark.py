@@ -44,7 +44,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
-from bench.helpers.doc_section import lock_path, locked, write_section  # noqa: E402
+from bench.helpers.doc_section import lock_path, locked, write_json, write_section  # noqa: E402
 from bench.helpers.paths import BUILD, ROOT, compiled_core  # noqa: E402
 
 DOC = os.path.join(ROOT, "docs", "lights-benchmark.md")
@@ -370,9 +370,7 @@ def main():
             os.makedirs(out, exist_ok=True)
             result = run_blender(tag, out, time_limit)
             os.makedirs(os.path.dirname(result_path(tag)), exist_ok=True)
-            with open(result_path(tag) + ".tmp", "w") as f:
-                json.dump(result, f, indent=1)
-            os.replace(result_path(tag) + ".tmp", result_path(tag))
+            write_json(result_path(tag), result)
             print(f"Blender {tag}: {result['seconds']:.0f} s", flush=True)
             if not QUICK:
                 copy_pictures(result, out)

@@ -24,7 +24,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
-from bench.helpers.doc_section import write_section  # noqa: E402
+from bench.helpers.doc_section import write_json, write_section  # noqa: E402
 from bench.helpers.paths import ROOT  # noqa: E402
 from bench.lights_eevee_benchmark import (  # noqa: E402
     BLENDERS, COUNTS, DOC, GOAL1_TOLERANCE, GOAL2_COUNT, GOAL2_RATIO, OUT, SHADOW_BUDGET, baseline, result_path,
@@ -87,7 +87,7 @@ def pool_section(results):
     if not results:
         return []
     full = "; ".join(f"{r['blender']}: " + ", ".join(
-        f"{k.split('_')[1]} suns {v or 'fit'}" + (" pages" if v else "") for k, v in r["full_size"]["pages_needed"].items())
+        f"{k.split('_')[1]} suns " + (f"{v} pages" if v else "fit") for k, v in r["full_size"]["pages_needed"].items())
         for r in results)
     size = "x".join(map(str, results[0]["full_size"]["size"]))
     return [
@@ -138,10 +138,7 @@ def run_shadow_pool(tags):
     for tag in tags:
         out = os.path.join(OUT, f"shadow_pool_{tag}")
         os.makedirs(out, exist_ok=True)
-        result = run_blender(tag, out, None, POOL_SCRIPT)
-        with open(stored_path(tag, "shadow_pool") + ".tmp", "w") as f:
-            json.dump(result, f, indent=1)
-        os.replace(stored_path(tag, "shadow_pool") + ".tmp", stored_path(tag, "shadow_pool"))
+        write_json(stored_path(tag, "shadow_pool"), run_blender(tag, out, None, POOL_SCRIPT))
 
 
 def stored(kind, tags):
@@ -165,9 +162,7 @@ def main():
             published = json.load(f)
         result = run_blender(tag, os.path.join(OUT, tag), None, SCRIPT)
         check_renders(result, published)
-        with open(stored_path(tag) + ".tmp", "w") as f:
-            json.dump(result, f, indent=1)
-        os.replace(stored_path(tag) + ".tmp", stored_path(tag))
+        write_json(stored_path(tag), result)
     write_section(DOC, MARKER, section(stored("direct", BLENDERS), stored("shadow_pool", POOL_TAGS)),
                   "\n## Shadowed comparison (EEVEE)")
     print("wrote", DOC)

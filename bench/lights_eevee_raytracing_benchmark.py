@@ -17,7 +17,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
-from bench.helpers.doc_section import write_section  # noqa: E402
+from bench.helpers.doc_section import write_json, write_section  # noqa: E402
 from bench.helpers.paths import ROOT  # noqa: E402
 from bench.lights_eevee_benchmark import (  # noqa: E402
     DOC, GOAL2_COUNT, OUT, QUICK, result_path, run_blender, variant_label)
@@ -150,10 +150,7 @@ def main():
     for tag in ([] if "--section-only" in argv else tags):
         out = os.path.join(OUT, f"raytracing_{tag}")
         os.makedirs(out, exist_ok=True)
-        result = run_blender(tag, out, None, SCRIPT)
-        with open(stored_path(tag) + ".tmp", "w") as f:
-            json.dump(result, f, indent=1)
-        os.replace(stored_path(tag) + ".tmp", stored_path(tag))
+        write_json(stored_path(tag), run_blender(tag, out, None, SCRIPT))
     results = []
     for tag in TAGS:
         if os.path.exists(stored_path(tag)):

@@ -33,6 +33,13 @@ def write_section(path, marker, section, after=None):
     os.replace(path + ".tmp", path)
 
 
+def write_json(path, value):
+    """`value` as indented JSON at `path`, written to a temporary name, then renamed."""
+    with open(path + ".tmp", "w") as f:
+        json.dump(value, f, indent=1)
+    os.replace(path + ".tmp", path)
+
+
 def update_json(path, key, value):
     """Sets `key` of the JSON object in the file at `path` (a new one when
     absent), written atomically: a section rewritten alone keeps its
@@ -42,9 +49,7 @@ def update_json(path, key, value):
         with open(path) as f:
             stored = json.load(f)
     stored[key] = value
-    with open(path + ".tmp", "w") as f:
-        json.dump(stored, f, indent=1)
-    os.replace(path + ".tmp", path)
+    write_json(path, stored)
 
 
 @contextlib.contextmanager
