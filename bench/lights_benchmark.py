@@ -38,6 +38,7 @@ from bench.helpers.doc_section import write_section  # noqa: E402
 from bench.helpers.median_cut import median_cut  # noqa: E402
 from bench.helpers.metrics import rel_rmse  # noqa: E402
 from bench.helpers.paths import ROOT, compiled_core  # noqa: E402
+from bench.helpers.result_line import only_result  # noqa: E402
 
 _penumbra = compiled_core()
 
@@ -120,18 +121,16 @@ SHADOW_SPP = 128
 def _bpy_result(script_name, args, what, timeout):
     """The "RESULT {json}" line of bench/blender_scripts/<script_name> run in
     the bpy 4.5 module (a fresh process) with a temporary folder and `args`."""
-    import json
     import subprocess
     import tempfile
     python = os.path.join(ROOT, ".venv", "bin", "python")
     script = os.path.join(ROOT, "bench", "blender_scripts", script_name)
     with tempfile.TemporaryDirectory(prefix="penumbra_lights_") as tmp:
         res = subprocess.run([python, script, tmp, *args], capture_output=True, text=True, timeout=timeout)
-        line = [x for x in res.stdout.splitlines() if x.startswith("RESULT ")]
-        if res.returncode != 0 or not line:
-            print(res.stdout[-3000:], res.stderr[-3000:])
-            raise RuntimeError(f"the {what} failed")
-        return json.loads(line[0][len("RESULT "):])
+        try:
+            return only_result(res, exit_zero=True, tail=3000)
+        except RuntimeError as failure:
+            raise RuntimeError(f"the {what} failed: {failure}") from None
 
 
 def shadowed_comparison():
@@ -246,7 +245,7 @@ def main():
                          for k in ("reference", *FLICKER_VARIANTS, "untracked")}
         print(f"  flicker {name}: {flicker[name]}", flush=True)
 
-    lines = ["# Light-rig benchmark results", "",
+    title = ["# Light-rig benchmark results", "",
              f"Written by `bench/lights_benchmark.py` ({time.strftime('%Y-%m-%d')}, {time.time() - started:.0f} s). "
              "Irradiance relative RMSE over 1000 normals against the exact irradiance of the full 1024x512 map, "
              "geometric mean over Blender's 8 bundled HDRIs (city, courtyard, forest, interior, night, studio, "
@@ -256,57 +255,57 @@ def main():
     base = table["median cut (Debevec 2005)"]
     for name, row in table.items():
         cells = [f"{100 * row[n]:.2f}% ({row[n] / base[n]:.2f}×)" for n in COUNTS]
-        lines.append(f"| {name} | " + " | ".join(cells) + " |")
-    lines += ["", "## Temporal flicker", "",
-              "Mean relative RMS change of irradiance on 200 normals between consecutive frames, 64 lights drawn as "
-              "Blender 4.x suns, forest.exr at 256x128, 40 frames (the first and last 4 frame pairs left out). "
-              "`reference` is the map's own change (what a perfect rig would show). Since issue #14 a rig keeps "
-              "each frame's own brightness unless asked to filter it (`filter_brightness`, the add-on's "
-              "Temporal > Brightness): the default follows a lamp's flicker as the map does; the paper's way "
-              "removes it, and with it the source's real exposure changes. The video benchmark below has the "
-              "criteria of issue #14 goal 2.", "",
-              "| sequence | reference | " + " | ".join(FLICKER_VARIANTS) + " | resampled per frame, untracked |",
-              "|---|---|" + "---|" * len(FLICKER_VARIANTS) + "---|"]
+        title.append(f"| {name} | " + " | ".join(cells) + " |")
+    flicker_lines = [
+        "", "## Temporal flicker", "",
+        "Mean relative RMS change of irradiance on 200 normals between consecutive frames, 64 lights drawn as "
+        "Blender 4.x suns, forest.exr at 256x128, 40 frames (the first and last 4 frame pairs left out). "
+        "`reference` is the map's own change (what a perfect rig would show). Since issue #14 a rig keeps "
+        "each frame's own brightness unless asked to filter it (`filter_brightness`, the add-on's "
+        "Temporal > Brightness): the default follows a lamp's flicker as the map does; the paper's way "
+        "removes it, and with it the source's real exposure changes. The video benchmark below has the "
+        "criteria of issue #14 goal 2.", "",
+        "| sequence | reference | " + " | ".join(FLICKER_VARIANTS) + " | resampled per frame, untracked |",
+        "|---|---|" + "---|" * len(FLICKER_VARIANTS) + "---|"]
     for name, row in flicker.items():
-        lines.append(f"| {name} | " + " | ".join(f"{100 * row[k]:.3f}%" for k in
-                                                    ("reference", *FLICKER_VARIANTS, "untracked")) + " |")
-    lines += ["", "## Shadowed comparison (Cycles)", "",
-              "A sphere on a plane under Blender's `sunrise.exr` (its sun casts a visible shadow), Cycles on the "
-              f"CPU, 128x96 pixels, {SHADOW_SPP} samples, denoising off, bpy 4.5; rendered lit by the World "
-              "(reference), by the World again with another seed (the noise floor: what two equally correct "
-              "renders differ by), and by rigs of N suns built from the World by `penumbra.build_light_rig` "
-              "(region powers, Havran; World strength 0). Error = RMS of the luminance difference over all "
-              "pixels / mean reference luminance. Pictures: [World](lights/render_world.png), "
-              "[64 suns](lights/render_rig_64.png).", "",
-              "The rig's own noise is the same error between two seeds of the rig render; "
-              "`bias` = sqrt(max(0, RMSE² − (noise_World² + noise_rig²)/2)) estimates the part that is not Monte "
-              "Carlo noise. `mean` = mean luminance of the render / the World render's (a scale error shows "
-              "here).", "",
-              "Two Cycles facts the suns are written for (docs/lights.md, \"Suns in Cycles\"): a sun whose angle "
-              "is positive but below ~1e-10 rad renders black (before the fix, a one-pixel region's rounding-noise "
-              "radius of 1.6e-16 rad put out one of the four suns standing for the map's sun (11% of the flux): 17.6% error, mean 0.90), and "
-              "Blender 4.x's wide suns carry strength·2/(1 + cos h) of ∫L dω (before the fix, 16 suns with angles "
-              "up to 142° rendered 13% too bright: 16.6%, mean 1.13).", "",
-              "| lit by | relative RMSE vs World | ratio to the World's noise floor | rig's own noise | bias | mean |",
-              "|---|---|---|---|---|---|",
-              f"| World, other seed (noise floor) | {100 * shadows['noise']:.2f}% | 1.00× | – | – "
-              f"| {shadows['noise mean']:.3f} |"]
+        cells = [f"{100 * row[k]:.3f}%" for k in ("reference", *FLICKER_VARIANTS, "untracked")]
+        flicker_lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    shadow_lines = [
+        "", "## Shadowed comparison (Cycles)", "",
+        "A sphere on a plane, both of one Principled BSDF at Blender's defaults "
+        "(`examples/scenes/light_rig_scene.py`), under Blender's `sunrise.exr` (its sun casts a visible shadow), "
+        "Cycles on the "
+        f"CPU, 128x96 pixels, {SHADOW_SPP} samples, denoising off, bpy 4.5; rendered lit by the World "
+        "(reference), by the World again with another seed (the noise floor: what two equally correct "
+        "renders differ by), and by rigs of N suns built from the World by `penumbra.build_light_rig` "
+        "(region powers, Havran; World strength 0). Error = RMS of the luminance difference over all "
+        "pixels / mean reference luminance. Pictures: [World](lights/render_world.png), "
+        "[64 suns](lights/render_rig_64.png).", "",
+        "The rig's own noise is the same error between two seeds of the rig render; "
+        "`bias` = sqrt(max(0, RMSE² − (noise_World² + noise_rig²)/2)) estimates the part that is not Monte "
+        "Carlo noise. `mean` = mean luminance of the render / the World render's (a scale error shows "
+        "here).", "",
+        "Two Cycles facts the suns are written for (docs/lights.md, \"Suns in Cycles\"): a sun whose angle "
+        "is positive but below ~1e-10 rad renders black (before the fix, a one-pixel region's rounding-noise "
+        "radius of 1.6e-16 rad put out one of the four suns standing for the map's sun (11% of the flux): 17.6% error, mean 0.90), and "
+        "Blender 4.x's wide suns carry strength·2/(1 + cos h) of ∫L dω (before the fix, 16 suns with angles "
+        "up to 142° rendered 13% too bright: 16.6%, mean 1.13).", "",
+        "| lit by | relative RMSE vs World | ratio to the World's noise floor | rig's own noise | bias | mean |",
+        "|---|---|---|---|---|---|",
+        f"| World, other seed (noise floor) | {100 * shadows['noise']:.2f}% | 1.00× | – | – "
+        f"| {shadows['noise mean']:.3f} |"]
     for n in SHADOW_COUNTS:
         e, noise = shadows[str(n)], shadows[f"{n} noise"]
         bias = math.sqrt(max(0.0, e * e - 0.5 * (shadows['noise'] ** 2 + noise ** 2)))
-        lines.append(f"| {n} suns | {100 * e:.2f}% | {e / shadows['noise']:.2f}× | {100 * noise:.2f}% "
-                     f"| {100 * bias:.2f}% | {shadows[f'{n} mean']:.3f} |")
+        shadow_lines.append(f"| {n} suns | {100 * e:.2f}% | {e / shadows['noise']:.2f}× | {100 * noise:.2f}% "
+                            f"| {100 * bias:.2f}% | {shadows[f'{n} mean']:.3f} |")
     path = os.path.join(ROOT, "docs", "lights-benchmark.md")
-    # The fit's and the video's sections are their own scripts' (make bench
-    # runs them after this one); kept as they are.
-    old = open(path).read() if os.path.exists(path) else ""
-    for heading in (EQUAL_TIME_SECTION, lights_fit_benchmark.SECTION, lights_video_benchmark.SECTION):
-        if heading in old:
-            rest = old.split(heading, 1)[1]
-            lines += ["", heading + (rest[:rest.find("\n## ")] if "\n## " in rest else rest).rstrip("\n")]
-    with open(path + ".tmp", "w") as f:
-        f.write("\n".join(lines) + "\n")
-    os.replace(path + ".tmp", path)
+    # Only this script's three sections are replaced: the page's others
+    # (equal time, the fit, the video, the EEVEE drivers') are their own
+    # scripts' and stay as they are.
+    write_section(path, title[0], "\n".join(title) + "\n")
+    write_section(path, flicker_lines[1], "\n".join(flicker_lines) + "\n", title[0])
+    write_section(path, shadow_lines[1], "\n".join(shadow_lines) + "\n", flicker_lines[1])
     print(f"wrote {path}")
 
 

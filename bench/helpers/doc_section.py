@@ -17,7 +17,8 @@ def replace_section(text, marker, section, after=None):
         start = text.index(marker)
         end = text.find("\n## ", start + len(marker))
         end = len(text) if end < 0 else end
-        return text[:start].rstrip("\n") + "\n" + section + text[end:]
+        head = text[:start].rstrip("\n")
+        return (head + "\n" if head else "") + section + text[end:]
     if after and after in text:
         end = text.find("\n## ", text.index(after) + len(after))
         if end >= 0:
