@@ -46,6 +46,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
 from bench.helpers.doc_section import lock_path, locked, write_json, write_section  # noqa: E402
 from bench.helpers.paths import BUILD, ROOT, compiled_core  # noqa: E402
+from bench.helpers.result_line import last_result  # noqa: E402
 
 DOC = os.path.join(ROOT, "docs", "lights-benchmark.md")
 RENDER = os.path.join(ROOT, "bench", "blender_scripts", "lights_eevee_render.py")
@@ -118,8 +119,7 @@ def run_blender(tag, out, time_limit, script=RENDER):
             code = None
     with open(log) as f:
         text = f.read()
-    line = [x for x in text.splitlines() if x.startswith("RESULT ")]
-    result = json.loads(line[-1][len("RESULT "):]) if line else {"ok": False}
+    result = last_result(text) or {"ok": False}
     if code is None and os.path.exists(os.path.join(out, "partial.json")):
         with open(os.path.join(out, "partial.json")) as f:
             result = dict(json.load(f), ok=True, stopped=True)

@@ -17,6 +17,9 @@ import shutil
 import subprocess
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))  # bench.helpers
+from bench.helpers.result_line import only_result  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 HELPER = os.path.join(ROOT, "bench", "helpers", "gpu_preview_frames.py")
 SKINNING = os.path.join(ROOT, "bench", "helpers", "gpu_preview_skinning.py")
@@ -28,10 +31,10 @@ def run(command, timeout=5400):
     env = dict(os.environ)
     env.pop("PYTHONPATH", None)
     proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
-    lines = [line for line in proc.stdout.splitlines() if line.startswith("RESULT ")]
-    if len(lines) != 1:
-        sys.exit(f"{command} gave no result (exit {proc.returncode}):\n{proc.stderr[-3000:]}")
-    result = json.loads(lines[0][len("RESULT "):])
+    try:
+        result = only_result(proc, tail=3000)
+    except RuntimeError as failure:
+        sys.exit(f"{command} gave no result: {failure}")
     if not result["ok"]:
         sys.exit(result["error"])
     return result

@@ -1,11 +1,14 @@
 """The one line a script run inside Blender hands back to the process that
-started it (`RESULT {json}`), whatever happens, and a window's Blender quit
-afterwards as a user would (it would stay open after the script)."""
+started it (`RESULT {json}`, which result_line reads), whatever happens,
+and a window's Blender quit afterwards as a user would (it would stay open
+after the script)."""
 
 import json
 import traceback
 
 import bpy
+
+from bench.helpers.result_line import PREFIX
 
 
 def report(body):
@@ -18,6 +21,6 @@ def report(body):
     except Exception:
         result["ok"] = False
         result["error"] = traceback.format_exc()
-    print("RESULT " + json.dumps(result), flush=True)
+    print(PREFIX + json.dumps(result), flush=True)
     if not bpy.app.background:
         bpy.ops.wm.quit_blender()

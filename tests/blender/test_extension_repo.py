@@ -11,7 +11,6 @@ syncs and installs the update, restarts, and the new version runs.
 .blend; Install Add-on again with the next version over it; restart and open
 the old .blend."""
 
-import json
 import os
 import shutil
 import subprocess
@@ -19,6 +18,8 @@ import sys
 
 import bpy
 import pytest
+
+from bench.helpers.result_line import only_result
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -60,9 +61,7 @@ class User:
         else:
             command = [sys.executable, script, *args]
         proc = subprocess.run(command, env=self.env, capture_output=True, text=True, timeout=300)
-        lines = [line for line in proc.stdout.splitlines() if line.startswith("RESULT ")]
-        assert proc.returncode == 0 and len(lines) == 1, proc.stdout[-3000:] + proc.stderr[-3000:]
-        return json.loads(lines[0][len("RESULT "):])
+        return only_result(proc, exit_zero=True, tail=3000)
 
 
 def repack(version, dist, repo):

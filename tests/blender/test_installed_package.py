@@ -6,13 +6,14 @@ small scene, then disables and removes the add-on
 (installed_package_check.py). Nothing comes from the build tree."""
 
 import glob
-import json
 import os
 import subprocess
 import sys
 
 import bpy
 import pytest
+
+from bench.helpers.result_line import only_result
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -47,9 +48,7 @@ def installed_run(tmp_path_factory):
     else:
         command = [sys.executable, script, *args]
     proc = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
-    lines = [line for line in proc.stdout.splitlines() if line.startswith("RESULT ")]
-    assert proc.returncode == 0 and len(lines) == 1, proc.stdout[-3000:] + proc.stderr[-3000:]
-    report = json.loads(lines[0][len("RESULT "):])
+    report = only_result(proc, exit_zero=True, tail=3000)
     report["user_folder"] = str(user)
     return report
 

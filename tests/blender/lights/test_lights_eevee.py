@@ -9,13 +9,14 @@ gpu.init() cannot be undone, and the other tests of this process expect
 the headless module's state (no GPU: test_gpu_preview.py), so the check
 runs in a bpy 5.2 process of its own."""
 
-import json
 import os
 import subprocess
 import sys
 import textwrap
 
 import bpy
+
+from bench.helpers.result_line import only_result
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 BLENDER_TESTS = os.path.dirname(HERE)
@@ -43,9 +44,7 @@ def test_the_default_rig_drawn_by_eevee_next_matches_cycles_world(tmp_path):
     env = dict(os.environ)
     env.pop("PYTHONPATH", None)
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600, env=env)
-    lines = [line for line in proc.stdout.splitlines() if line.startswith("RESULT ")]
-    assert len(lines) == 1, f"exit {proc.returncode}\n{proc.stdout[-3000:]}\n{proc.stderr[-3000:]}"
-    result = json.loads(lines[0][len("RESULT "):])
+    result = only_result(proc, tail=3000)
     assert result["version"][:2] == list(bpy.app.version[:2]) and bpy.app.version >= (5, 0, 0)
     rig, reference = result["rig"], result["reference"]
     assert check.within_tolerance(rig, reference), rig / reference

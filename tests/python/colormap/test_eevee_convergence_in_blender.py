@@ -4,10 +4,11 @@ llvmpipe renders EEVEE Legacy there; the bpy modules have no GPU in
 background mode). Needs only `blender` and `xvfb-run`, which
 scripts/install_deps.sh installs."""
 
-import json
 import os
 import shutil
 import subprocess
+
+from bench.helpers.result_line import only_result
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 CHECK = os.path.join(ROOT, "tests", "blender", "colormap", "eevee_convergence_check.py")
@@ -20,9 +21,7 @@ def test_filtered_ramp_converges_in_eevee_and_its_lookup_is_not_mipmapped(tmp_pa
     env.pop("PYTHONPATH", None)
     proc = subprocess.run([xvfb, "-a", blender, "-b", "--factory-startup", "--python", CHECK, "--", str(tmp_path)],
                           cwd=ROOT, env=env, capture_output=True, text=True, timeout=1200)
-    lines = [line for line in proc.stdout.splitlines() if line.startswith("RESULT ")]
-    assert len(lines) == 1, f"exit {proc.returncode}\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}"
-    result = json.loads(lines[0][len("RESULT "):])
+    result = only_result(proc)
     assert result["ok"], result.get("error")
     rmse, lookup = result["rmse"], result["lookup"]
     with capsys.disabled():

@@ -10,10 +10,11 @@ frame the bake skipped, once per BRDF at order 4 with 2 lobes
 (tests/blender/visibility/gpu_model_humanoid.py); in Debian's Blender 3.4 in
 a window under Xvfb and in the bpy 5.2 module after gpu.init()."""
 
-import json
 import os
 import shutil
 import subprocess
+
+from bench.helpers.result_line import only_result
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 CHECK = os.path.join(ROOT, "tests", "blender", "visibility", "gpu_model_check.py")
@@ -25,9 +26,7 @@ def run_check(command, capsys, what):
     env = dict(os.environ)
     env.pop("PYTHONPATH", None)
     proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True, timeout=900)
-    lines = [line for line in proc.stdout.splitlines() if line.startswith("RESULT ")]
-    assert len(lines) == 1, f"exit {proc.returncode}\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}"
-    result = json.loads(lines[0][len("RESULT "):])
+    result = only_result(proc)
     assert result["ok"], result.get("error")
     cases = result["cases"]
     with capsys.disabled():

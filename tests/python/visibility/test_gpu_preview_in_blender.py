@@ -7,10 +7,11 @@ These need only the `blender`, `xvfb-run` and .venv313 programs that
 scripts/install_deps.sh installs. The frame time at 100k vertices is
 measured by bench/visibility_gpu_preview_benchmark.py, not here."""
 
-import json
 import os
 import shutil
 import subprocess
+
+from bench.helpers.result_line import only_result
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 CHECK = os.path.join(ROOT, "tests", "blender", "visibility", "gpu_preview_check.py")
@@ -23,9 +24,7 @@ def run_check(command, capsys, what, timeout=1500):
     env = dict(os.environ)
     env.pop("PYTHONPATH", None)
     proc = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True, timeout=timeout)
-    lines = [line for line in proc.stdout.splitlines() if line.startswith("RESULT ")]
-    assert len(lines) == 1, f"exit {proc.returncode}\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}"
-    result = json.loads(lines[0][len("RESULT "):])
+    result = only_result(proc)
     assert result["ok"], result.get("error")
     with capsys.disabled():
         print(f"\n{what}: {result['renderer']}")
