@@ -207,6 +207,75 @@ def equal_time_section(result, seconds):
     return lines
 
 
+def accuracy_section(table, seconds):
+    """The page's title and the accuracy table."""
+    title = ["# Light-rig benchmark results", "",
+             f"Written by `bench/lights_benchmark.py` ({time.strftime('%Y-%m-%d')}, {seconds:.0f} s). "
+             "Irradiance relative RMSE over 1000 normals against the exact irradiance of the full 1024x512 map, "
+             "geometric mean over Blender's 8 bundled HDRIs (city, courtyard, forest, interior, night, studio, "
+             "sunrise, sunset). Ratio = error / median cut's error at the same N (< 1: better than median cut).", "",
+             "| method | " + " | ".join(f"N={n}" for n in COUNTS) + " |",
+             "|---|" + "---|" * len(COUNTS)]
+    base = table["median cut (Debevec 2005)"]
+    for name, row in table.items():
+        cells = [f"{100 * row[n]:.2f}% ({row[n] / base[n]:.2f}×)" for n in COUNTS]
+        title.append(f"| {name} | " + " | ".join(cells) + " |")
+    return title
+
+
+def flicker_section(flicker):
+    """The section "Temporal flicker"."""
+    flicker_lines = [
+        "", "## Temporal flicker", "",
+        "Mean relative RMS change of irradiance on 200 normals between consecutive frames, 64 lights drawn as "
+        "Blender 4.x suns, forest.exr at 256x128, 40 frames (the first and last 4 frame pairs left out). "
+        "`reference` is the map's own change (what a perfect rig would show). Since issue #14 a rig keeps "
+        "each frame's own brightness unless asked to filter it (`filter_brightness`, the add-on's "
+        "Temporal > Brightness): the default follows a lamp's flicker as the map does; the paper's way "
+        "removes it, and with it the source's real exposure changes. The video benchmark below has the "
+        "criteria of issue #14 goal 2.", "",
+        "| sequence | reference | " + " | ".join(FLICKER_VARIANTS) + " | resampled per frame, untracked |",
+        "|---|---|" + "---|" * len(FLICKER_VARIANTS) + "---|"]
+    for name, row in flicker.items():
+        cells = [f"{100 * row[k]:.3f}%" for k in ("reference", *FLICKER_VARIANTS, "untracked")]
+        flicker_lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return flicker_lines
+
+
+def shadowed_section(shadows):
+    """The section "Shadowed comparison (Cycles)"."""
+    shadow_lines = [
+        "", "## Shadowed comparison (Cycles)", "",
+        "A sphere on a plane, both of one Principled BSDF at Blender's defaults "
+        "(`examples/scenes/light_rig_scene.py`), under Blender's `sunrise.exr` (its sun casts a visible shadow), "
+        "Cycles on the "
+        f"CPU, 128x96 pixels, {SHADOW_SPP} samples, denoising off, bpy 4.5; rendered lit by the World "
+        "(reference), by the World again with another seed (the noise floor: what two equally correct "
+        "renders differ by), and by rigs of N suns built from the World by `penumbra.build_light_rig` "
+        "(region powers, Havran; World strength 0). Error = RMS of the luminance difference over all "
+        "pixels / mean reference luminance. Pictures: [World](lights/render_world.png), "
+        "[64 suns](lights/render_rig_64.png).", "",
+        "The rig's own noise is the same error between two seeds of the rig render; "
+        "`bias` = sqrt(max(0, RMSE² − (noise_World² + noise_rig²)/2)) estimates the part that is not Monte "
+        "Carlo noise. `mean` = mean luminance of the render / the World render's (a scale error shows "
+        "here).", "",
+        "Two Cycles facts the suns are written for (docs/lights.md, \"Suns in Cycles\"): a sun whose angle "
+        "is positive but below ~1e-10 rad renders black (before the fix, a one-pixel region's rounding-noise "
+        "radius of 1.6e-16 rad put out one of the four suns standing for the map's sun (11% of the flux): 17.6% error, mean 0.90), and "
+        "Blender 4.x's wide suns carry strength·2/(1 + cos h) of ∫L dω (before the fix, 16 suns with angles "
+        "up to 142° rendered 13% too bright: 16.6%, mean 1.13).", "",
+        "| lit by | relative RMSE vs World | ratio to the World's noise floor | rig's own noise | bias | mean |",
+        "|---|---|---|---|---|---|",
+        f"| World, other seed (noise floor) | {100 * shadows['noise']:.2f}% | 1.00× | – | – "
+        f"| {shadows['noise mean']:.3f} |"]
+    for n in SHADOW_COUNTS:
+        e, noise = shadows[str(n)], shadows[f"{n} noise"]
+        bias = math.sqrt(max(0.0, e * e - 0.5 * (shadows['noise'] ** 2 + noise ** 2)))
+        shadow_lines.append(f"| {n} suns | {100 * e:.2f}% | {e / shadows['noise']:.2f}× | {100 * noise:.2f}% "
+                            f"| {100 * bias:.2f}% | {shadows[f'{n} mean']:.3f} |")
+    return shadow_lines
+
+
 def main():
     if "--equal-time" in sys.argv[1:]:
         started = time.time()
@@ -245,60 +314,9 @@ def main():
                          for k in ("reference", *FLICKER_VARIANTS, "untracked")}
         print(f"  flicker {name}: {flicker[name]}", flush=True)
 
-    title = ["# Light-rig benchmark results", "",
-             f"Written by `bench/lights_benchmark.py` ({time.strftime('%Y-%m-%d')}, {time.time() - started:.0f} s). "
-             "Irradiance relative RMSE over 1000 normals against the exact irradiance of the full 1024x512 map, "
-             "geometric mean over Blender's 8 bundled HDRIs (city, courtyard, forest, interior, night, studio, "
-             "sunrise, sunset). Ratio = error / median cut's error at the same N (< 1: better than median cut).", "",
-             "| method | " + " | ".join(f"N={n}" for n in COUNTS) + " |",
-             "|---|" + "---|" * len(COUNTS)]
-    base = table["median cut (Debevec 2005)"]
-    for name, row in table.items():
-        cells = [f"{100 * row[n]:.2f}% ({row[n] / base[n]:.2f}×)" for n in COUNTS]
-        title.append(f"| {name} | " + " | ".join(cells) + " |")
-    flicker_lines = [
-        "", "## Temporal flicker", "",
-        "Mean relative RMS change of irradiance on 200 normals between consecutive frames, 64 lights drawn as "
-        "Blender 4.x suns, forest.exr at 256x128, 40 frames (the first and last 4 frame pairs left out). "
-        "`reference` is the map's own change (what a perfect rig would show). Since issue #14 a rig keeps "
-        "each frame's own brightness unless asked to filter it (`filter_brightness`, the add-on's "
-        "Temporal > Brightness): the default follows a lamp's flicker as the map does; the paper's way "
-        "removes it, and with it the source's real exposure changes. The video benchmark below has the "
-        "criteria of issue #14 goal 2.", "",
-        "| sequence | reference | " + " | ".join(FLICKER_VARIANTS) + " | resampled per frame, untracked |",
-        "|---|---|" + "---|" * len(FLICKER_VARIANTS) + "---|"]
-    for name, row in flicker.items():
-        cells = [f"{100 * row[k]:.3f}%" for k in ("reference", *FLICKER_VARIANTS, "untracked")]
-        flicker_lines.append(f"| {name} | " + " | ".join(cells) + " |")
-    shadow_lines = [
-        "", "## Shadowed comparison (Cycles)", "",
-        "A sphere on a plane, both of one Principled BSDF at Blender's defaults "
-        "(`examples/scenes/light_rig_scene.py`), under Blender's `sunrise.exr` (its sun casts a visible shadow), "
-        "Cycles on the "
-        f"CPU, 128x96 pixels, {SHADOW_SPP} samples, denoising off, bpy 4.5; rendered lit by the World "
-        "(reference), by the World again with another seed (the noise floor: what two equally correct "
-        "renders differ by), and by rigs of N suns built from the World by `penumbra.build_light_rig` "
-        "(region powers, Havran; World strength 0). Error = RMS of the luminance difference over all "
-        "pixels / mean reference luminance. Pictures: [World](lights/render_world.png), "
-        "[64 suns](lights/render_rig_64.png).", "",
-        "The rig's own noise is the same error between two seeds of the rig render; "
-        "`bias` = sqrt(max(0, RMSE² − (noise_World² + noise_rig²)/2)) estimates the part that is not Monte "
-        "Carlo noise. `mean` = mean luminance of the render / the World render's (a scale error shows "
-        "here).", "",
-        "Two Cycles facts the suns are written for (docs/lights.md, \"Suns in Cycles\"): a sun whose angle "
-        "is positive but below ~1e-10 rad renders black (before the fix, a one-pixel region's rounding-noise "
-        "radius of 1.6e-16 rad put out one of the four suns standing for the map's sun (11% of the flux): 17.6% error, mean 0.90), and "
-        "Blender 4.x's wide suns carry strength·2/(1 + cos h) of ∫L dω (before the fix, 16 suns with angles "
-        "up to 142° rendered 13% too bright: 16.6%, mean 1.13).", "",
-        "| lit by | relative RMSE vs World | ratio to the World's noise floor | rig's own noise | bias | mean |",
-        "|---|---|---|---|---|---|",
-        f"| World, other seed (noise floor) | {100 * shadows['noise']:.2f}% | 1.00× | – | – "
-        f"| {shadows['noise mean']:.3f} |"]
-    for n in SHADOW_COUNTS:
-        e, noise = shadows[str(n)], shadows[f"{n} noise"]
-        bias = math.sqrt(max(0.0, e * e - 0.5 * (shadows['noise'] ** 2 + noise ** 2)))
-        shadow_lines.append(f"| {n} suns | {100 * e:.2f}% | {e / shadows['noise']:.2f}× | {100 * noise:.2f}% "
-                            f"| {100 * bias:.2f}% | {shadows[f'{n} mean']:.3f} |")
+    title = accuracy_section(table, time.time() - started)
+    flicker_lines = flicker_section(flicker)
+    shadow_lines = shadowed_section(shadows)
     path = os.path.join(ROOT, "docs", "lights-benchmark.md")
     # Only this script's three sections are replaced: the page's others
     # (equal time, the fit, the video, the EEVEE drivers') are their own
