@@ -121,7 +121,7 @@ class _Job:
         # The fit assumes every sun casts a shadow unless only a few do: then
         # the shadowless majority is drawn as Cycles draws it.
         self.eevee = rig_objects.targets_eevee(op.target_renderer, self.scene)
-        shadows = rig_objects.shadow_choice(op.shadow_budget, op.limit_shadows)
+        shadows = rig_objects.shadow_choice(op.shadow_budget, op.limit_shadows, rig_objects.legacy_eevee(self.eevee))
         self.sun_model = rig_objects.sun_model(eevee=self.eevee, shadow=shadows.count == 0)
         self.builder = self.core.lights.RigBuilder(
             count=op.count, sampler=op.sampler, blue_noise=op.blue_noise, power=op.power, mapping=self.mapping,
@@ -215,7 +215,12 @@ class _Job:
         msg = (f"{rig['slots']} lights over {len(rig['defects'])} frame(s) in '{collection.name}'; JSON: {json_path}")
         if s.adaptive_count > 0:
             msg += f"; adaptive: {s.adaptive_count} suns, error {100.0 * s.adaptive_error:.2f} %"
-        overflow = shadow_pool.overflow_warning(self.scene, op.target_renderer, shadow_pool.shadowed_suns(collection))
+        shadowed = shadow_pool.shadowed_suns(collection)
+        chosen_for_legacy = not (op.shadow_budget or op.limit_shadows) and rig_objects.legacy_eevee(self.eevee)
+        if chosen_for_legacy and shadowed < rig["slots"]:
+            msg += (f"; EEVEE Legacy draws at most {rig_objects.LEGACY_SHADOWED_SUNS} sun shadows: "
+                    f"the {shadowed} strongest sharp suns cast them")
+        overflow = shadow_pool.overflow_warning(self.scene, op.target_renderer, shadowed)
         if overflow:
             msg += "; " + overflow
         if bad:

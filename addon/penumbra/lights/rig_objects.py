@@ -93,8 +93,10 @@ def _set_keys(id_block, path, index, frames, values):
     fc.update()
 
 
-# EEVEE Legacy's cascaded shadow maps go to at most this many suns;
-# limit_shadows gives shadows to this many strongest suns.
+# EEVEE Legacy's cascaded shadow maps go to at most this many suns
+# (MAX_SHADOW_CASCADE in 3.x's eevee_private.h): the first suns it meets get
+# them, the others light as if unshadowed; limit_shadows gives shadows to
+# this many strongest suns.
 LEGACY_SHADOWED_SUNS = 8
 
 # A sun casts an umbra behind an occluder only where the occluder looks wider
@@ -105,17 +107,31 @@ LEGACY_SHADOWED_SUNS = 8
 UMBRA_ANGLE = 2.0 * math.atan(0.5)
 
 # count: the suns that may cast a shadow (0: every sun); sharp_only: chosen
-# only among suns no wider than UMBRA_ANGLE.
-ShadowChoice = collections.namedtuple("ShadowChoice", "count sharp_only")
+# only among suns no wider than UMBRA_ANGLE; renderer_cap: the count is what
+# the renderer can draw, not the user's budget, so a rig of no more suns
+# than that shadows them all.
+ShadowChoice = collections.namedtuple("ShadowChoice", "count sharp_only renderer_cap", defaults=(False,))
 
 
-def shadow_choice(shadow_budget, limit_shadows):
+def legacy_eevee(eevee):
+    """Whether a rig drawn by EEVEE (`eevee`) is drawn by EEVEE Legacy (before 4.2)."""
+    return eevee and bpy.app.version < (4, 2, 0)
+
+
+def shadow_choice(shadow_budget, limit_shadows, legacy=False):
     """The suns that cast shadows: `shadow_budget` > 0, that many of the
     strongest sharp suns; else limit_shadows, the LEGACY_SHADOWED_SUNS
-    strongest of any width (its contract since 0.2); else every sun."""
+    strongest of any width (its contract since 0.2); else every sun, except
+    for EEVEE Legacy (`legacy`), which would shadow the first
+    LEGACY_SHADOWED_SUNS it meets and no more: the rig picks them as a
+    budget of that many would (docs/lights.md, "Shadow budget")."""
     if shadow_budget > 0:
         return ShadowChoice(int(shadow_budget), True)
-    return ShadowChoice(LEGACY_SHADOWED_SUNS if limit_shadows else 0, False)
+    if limit_shadows:
+        return ShadowChoice(LEGACY_SHADOWED_SUNS, False)
+    if legacy:
+        return ShadowChoice(LEGACY_SHADOWED_SUNS, True, renderer_cap=True)
+    return ShadowChoice(0, False)
 
 
 def shadowed_indices(mean_power, limit=LEGACY_SHADOWED_SUNS, angle=None):
@@ -152,7 +168,8 @@ class _Values:
         # A sun's width over the shot, as its power weighs the frames.
         width = (self.angle * power).sum(axis=0) / np.maximum(power.sum(axis=0), 1e-30)
         chosen = shadowed_indices(power.mean(axis=0), shadows.count, width if shadows.sharp_only else None)
-        self.shadow = [(k in chosen) if shadows.count > 0 else True for k in range(self.slots)]
+        every = shadows.count == 0 or (shadows.renderer_cap and self.slots <= shadows.count)
+        self.shadow = [every or k in chosen for k in range(self.slots)]
         # EEVEE Legacy gives a sun another power per strength than Cycles does;
         # EEVEE Next the same, shadowed or not (docs/lights.md, "Suns in EEVEE").
         models = [sun_model(eevee=eevee, shadow=self.shadow[k]) for k in range(self.slots)]
@@ -255,12 +272,13 @@ def write_rig(scene, settings, rig, frame_start, limit_shadows, eevee=False, sha
     """Creates or updates the collection, root and suns from `rig` (the dict of
     _penumbra.lights.RigBuilder.finish) with keyframes from frame_start;
     the suns that cast a shadow are shadow_choice's: the `shadow_budget`
-    strongest sharp suns, or with limit_shadows the 8 strongest, else all.
+    strongest sharp suns, or with limit_shadows the 8 strongest, else all
+    (for EEVEE Legacy, the 8 strongest sharp ones).
 
     All or nothing: the values are computed and checked first; if anything
     fails while the .blend is being changed, what was created is removed and
     what was changed is put back before the error propagates."""
-    values = _Values(rig, frame_start, shadow_choice(shadow_budget, limit_shadows), eevee)
+    values = _Values(rig, frame_start, shadow_choice(shadow_budget, limit_shadows, legacy_eevee(eevee)), eevee)
     snapshot = _Snapshot(scene, settings)
     try:
         coll = settings.collection

@@ -514,17 +514,24 @@ def test_shadow_limit_gives_shadows_to_the_eight_strongest(addon, tmp_path):
     json_path = str(tmp_path / "s.json")
     assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, limit_shadows=True,
                                             json_path=json_path) == {"FINISHED"}
+    suns, strongest, _ = _suns_by_strength(scene, json_path)
+    assert sorted(k for k, o in suns.items() if o.data.use_shadow) == sorted(strongest[:8])
+    # Without it every sun casts a shadow (Cycles: EEVEE Legacy's own choice is
+    # test_a_rig_for_eevee_legacy_picks_the_eight_suns_it_shadows).
+    assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, limit_shadows=False, target_renderer="CYCLES",
+                                            json_path=json_path) == {"FINISHED"}
+    assert all(o.data.use_shadow for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT")
+
+
+def _suns_by_strength(scene, json_path):
+    """The rig's suns by index, and their indices strongest first (mean
+    luminance over the shot, from the JSON's own numbers) with their powers."""
     from penumbra.lights.rig_objects import INDEX_KEY
     suns = {int(o[INDEX_KEY]): o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"}
-    # The strongest by mean luminance, from the JSON's own numbers.
     doc = json.load(open(json_path))
     y = np.array([0.2126, 0.7152, 0.0722])
     power = np.mean([[np.dot(l["rgb"], y) for l in f["lights"]] for f in doc["frames"]], axis=0)
-    strongest = set(np.argsort(-power)[:8].tolist())
-    assert sorted(k for k, o in suns.items() if o.data.use_shadow) == sorted(strongest)
-    assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, limit_shadows=False,
-                                            json_path=json_path) == {"FINISHED"}
-    assert all(o.data.use_shadow for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT")
+    return suns, [int(k) for k in np.argsort(-power, kind="stable")], power
 
 
 def test_shadow_budget_gives_shadows_to_the_strongest_sharp_suns(addon, tmp_path):
@@ -536,17 +543,41 @@ def test_shadow_budget_gives_shadows_to_the_strongest_sharp_suns(addon, tmp_path
     json_path = str(tmp_path / "s.json")
     assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, shadow_budget=3,
                                             json_path=json_path) == {"FINISHED"}
-    from penumbra.lights.rig_objects import INDEX_KEY
-    suns = {int(o[INDEX_KEY]): o for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT"}
-    doc = json.load(open(json_path))
-    y = np.array([0.2126, 0.7152, 0.0722])
-    power = np.mean([[np.dot(l["rgb"], y) for l in f["lights"]] for f in doc["frames"]], axis=0)
+    suns, strongest, power = _suns_by_strength(scene, json_path)
     umbra = 2.0 * math.atan(0.5)
-    sharp = [int(k) for k in np.argsort(-power, kind="stable") if suns[int(k)].data.angle <= umbra]
+    sharp = [k for k in strongest if suns[k].data.angle <= umbra]
     shadowed = sorted(k for k, o in suns.items() if o.data.use_shadow)
     assert shadowed == sorted(sharp[:3])
     # The map makes the rule matter: a wide sun outranks a shadowed one.
     assert any(o.data.angle > umbra and power[k] > min(power[shadowed]) for k, o in suns.items())
+
+
+def test_a_rig_for_eevee_legacy_picks_the_eight_suns_it_shadows(addon, tmp_path):
+    """EEVEE Legacy draws the shadows of the first 8 suns it meets and no
+    more: a rig for it gives them to the 8 strongest sharp suns (as a budget
+    of 8) and says so, unless it has no more than 8 suns. EEVEE Next and
+    Cycles draw every sun's shadow, so there every sun keeps one."""
+    scene = addon
+    path = write_map(str(tmp_path / "map.exr"), sky_and_sun(h=32, w=64, sky=0.2))
+    json_path = str(tmp_path / "s.json")
+    legacy = bpy.app.version < (4, 2, 0)
+    for count in (20, 6):
+        assert bpy.ops.penumbra.build_light_rig(filepath=path, count=count, target_renderer="EEVEE",
+                                                json_path=json_path) == {"FINISHED"}
+        suns, strongest, _ = _suns_by_strength(scene, json_path)
+        shadowed = sorted(k for k, o in suns.items() if o.data.use_shadow)
+        report = scene.penumbra.light_rig.last_report
+        if legacy and count > 8:
+            umbra = 2.0 * math.atan(0.5)
+            picked = sorted([k for k in strongest if suns[k].data.angle <= umbra][:8])
+            assert shadowed == picked and "EEVEE Legacy draws at most 8 sun shadows" in report, report
+            # Legacy left alone would shadow the first 8 suns created (slots 0-7).
+            assert picked != list(range(8))
+        else:
+            assert shadowed == sorted(suns) and "EEVEE Legacy" not in report, report
+    assert bpy.ops.penumbra.build_light_rig(filepath=path, count=20, target_renderer="CYCLES",
+                                            json_path=json_path) == {"FINISHED"}
+    assert all(o.data.use_shadow for o in scene.penumbra.light_rig.collection.objects if o.type == "LIGHT")
 
 
 def test_fit_irradiance_makes_the_suns_as_drawn_closer_to_the_maps_irradiance(addon, tmp_path):
