@@ -76,7 +76,8 @@ class LightRigSceneSettings(bpy.types.PropertyGroup):
     shadow_budget: bpy.props.IntProperty(
         name="Shadow Budget", default=0, min=0,
         description="Only this many suns cast shadows: the strongest of those sharp enough to cast a visible "
-                    "shadow, at most 53° wide (0: every sun, or Shadows for 8 Strongest)")
+                    "shadow, at most 53° wide (0: every sun, or Shadows for 8 Strongest; EEVEE Legacy draws "
+                    "8 sun shadows, so a rig of more suns for it shadows the 8 strongest sharp ones)")
     target_renderer: bpy.props.EnumProperty(
         name="Target Renderer", items=TARGET_RENDERER_ITEMS, default="SCENE",
         description="The renderer the suns are fitted for (docs/lights.md, \"Suns in EEVEE\"). EEVEE Next "
