@@ -218,8 +218,9 @@ class _Job:
         shadowed = shadow_pool.shadowed_suns(collection)
         chosen_for_legacy = not (op.shadow_budget or op.limit_shadows) and rig_objects.legacy_eevee(self.eevee)
         if chosen_for_legacy and shadowed < rig["slots"]:
-            msg += (f"; EEVEE Legacy draws at most {rig_objects.LEGACY_SHADOWED_SUNS} sun shadows: "
-                    f"the {shadowed} strongest sharp suns cast them")
+            which = (f"the {shadowed} strongest sharp suns cast them" if shadowed else
+                     "no sun is sharp enough to cast a visible one")
+            msg += f"; EEVEE Legacy draws at most {rig_objects.LEGACY_SHADOWED_SUNS} sun shadows: {which}"
         overflow = shadow_pool.overflow_warning(self.scene, op.target_renderer, shadowed)
         if overflow:
             msg += "; " + overflow
