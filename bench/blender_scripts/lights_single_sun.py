@@ -1,7 +1,9 @@
 """Issue #26's single-sun measurement, inside one Blender: one sun at 30°
 elevation over a plane seen from above, EEVEE (32x32, 16 samples) against
 Cycles with no bounces, for sun angles 0/30/90/120° with its shadow on and
-off. Prints one line "RESULT {json}" of EEVEE's mean / Cycles' mean:
+off, then a point sun at the elevations in ELEVATIONS (how each EEVEE
+shades the surface under low light). Prints one line "RESULT {json}" of
+EEVEE's mean / Cycles' mean:
 
     .venv/bin/python bench/blender_scripts/lights_single_sun.py
     .venv313/bin/python bench/blender_scripts/lights_single_sun.py
@@ -19,6 +21,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspa
 from bench.helpers.lights_eevee import eevee_engine, mean_luminance, plane_seen_from_above  # noqa: E402
 
 ANGLES = (0, 30, 90, 120)
+ELEVATIONS = (3, 6, 10, 20, 30, 60)  # degrees above the plane
 
 
 def scene_with_sun(size=32, samples=16):
@@ -31,11 +34,28 @@ def scene_with_sun(size=32, samples=16):
     data = bpy.data.lights.new("Sun", "SUN")
     sun = bpy.data.objects.new("Sun", data)
     scene.collection.objects.link(sun)
-    sun.rotation_euler = (math.radians(60.0), 0.0, 0.0)  # 30° above the horizon
+    point_sun_at(sun, 30.0)
     data.energy = 1.0
     scene.cycles.max_bounces = 0
     scene.eevee.taa_render_samples = samples
     return scene, data
+
+
+def point_sun_at(sun, elevation):
+    """Turns the sun to `elevation` degrees above the horizon."""
+    sun.rotation_euler = (math.radians(90.0 - elevation), 0.0, 0.0)
+
+
+def by_elevation(scene, light, out):
+    """EEVEE's mean / Cycles' for a point sun at each of ELEVATIONS."""
+    sun, ratios = bpy.data.objects["Sun"], {}
+    light.angle, light.use_shadow = 0.0, True
+    for elevation in ELEVATIONS:
+        point_sun_at(sun, elevation)
+        ratios[f"point at {elevation}°"] = (mean_luminance(scene, eevee_engine(), out)
+                                            / mean_luminance(scene, "CYCLES", out))
+    point_sun_at(sun, 30.0)
+    return ratios
 
 
 def main():
@@ -54,6 +74,7 @@ def main():
             light.use_shadow = shadow
             result[f"{angle} {'on' if shadow else 'off'}"] = mean_luminance(scene, eevee_engine(), out) / cycles
         print(angle, result, flush=True)
+    result.update(by_elevation(scene, light, out))
     print("RESULT " + json.dumps(result), flush=True)
 
 
