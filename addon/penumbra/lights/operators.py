@@ -121,8 +121,9 @@ class _Job:
         # The fit assumes every sun casts a shadow unless only a few do: then
         # the shadowless majority is drawn as Cycles draws it.
         self.eevee = rig_objects.targets_eevee(op.target_renderer, self.scene)
-        shadows = rig_objects.shadow_choice(op.shadow_budget, op.limit_shadows, rig_objects.legacy_eevee(self.eevee))
-        self.sun_model = rig_objects.sun_model(eevee=self.eevee, shadow=shadows.count == 0)
+        self.shadows = rig_objects.shadow_choice(op.shadow_budget, op.limit_shadows,
+                                                 rig_objects.legacy_eevee(self.eevee))
+        self.sun_model = rig_objects.sun_model(eevee=self.eevee, shadow=self.shadows.count == 0)
         self.builder = self.core.lights.RigBuilder(
             count=op.count, sampler=op.sampler, blue_noise=op.blue_noise, power=op.power, mapping=self.mapping,
             temporal_filter=op.temporal_filter, frames_per_second=self.fps, cluster_max=op.cluster_max,
@@ -216,8 +217,7 @@ class _Job:
         if s.adaptive_count > 0:
             msg += f"; adaptive: {s.adaptive_count} suns, error {100.0 * s.adaptive_error:.2f} %"
         shadowed = shadow_pool.shadowed_suns(collection)
-        chosen_for_legacy = not (op.shadow_budget or op.limit_shadows) and rig_objects.legacy_eevee(self.eevee)
-        if chosen_for_legacy and shadowed < rig["slots"]:
+        if self.shadows.renderer_cap and shadowed < rig["slots"]:
             which = (f"the {shadowed} strongest sharp suns cast them" if shadowed else
                      "no sun is sharp enough to cast a visible one")
             msg += f"; EEVEE Legacy draws at most {rig_objects.LEGACY_SHADOWED_SUNS} sun shadows: {which}"
