@@ -87,7 +87,7 @@ def test_demo_errors_say_what_the_readme_says(quick_demo):
     """Thresholds for the quick mode's few samples, with a margin: measured
     mean |ΔAO| 0.008–0.011, render RMSE 3.5–7 %, colour-map RMSE 0.245
     plain → 0.041 Penumbra at 1 spp."""
-    _, _, summaries = quick_demo
+    out, _, summaries = quick_demo
     for name, summary in summaries.items():
         visibility = summary["visibility"]
         assert all(p["mean_abs"] < 0.03 for p in visibility["unseen_poses_vs_cycles_ao"]), name
@@ -103,7 +103,7 @@ def test_demo_errors_say_what_the_readme_says(quick_demo):
         assert abs(lights["render_mean_ratio"] - 1.0) < 0.05, name
         # EEVEE draws where it has a GPU context: the bpy 5.2 module after
         # gpu.init(). Measured in quick mode (4 samples): World 15.8 %, mean
-        # 0.961; the rig built for EEVEE 17.7 %, mean 0.893 (no bounce light).
+        # 0.961; the 32-sun rig built for EEVEE 18.2 %, mean 0.905 (no bounce light).
         assert ("eevee" in lights) == (name == "bpy-5.2"), name
         rmse = summary["colormap"]["rmse"]
         assert rmse["Penumbra filtered ramp 1 spp"] < 0.5 * rmse["plain ramp 1 spp"], name
@@ -114,6 +114,10 @@ def test_demo_errors_say_what_the_readme_says(quick_demo):
         assert equal["plain"]["spp"] > equal["filtered"]["spp"], (name, equal)
         assert 0.5 < equal["plain"]["seconds"] / equal["filtered"]["seconds"] < 2.0, (name, equal)
     eevee = summaries["bpy-5.2"]["light_rig"]["static"]["eevee"]
+    # The rig shown is one EEVEE draws whole: 64 suns overflowed EEVEE Next's
+    # factory shadow pool, which then drops shadows and prints this.
+    with open(os.path.join(out, "demo.log")) as f:
+        assert "Shadow buffer full" not in f.read()
     for lit_by in ("world", "rig"):
         assert eevee[lit_by]["render_relative_rmse"] < 0.3, lit_by
         assert 0.85 < eevee[lit_by]["render_mean_ratio"] < 1.05, lit_by
