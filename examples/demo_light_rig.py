@@ -4,7 +4,8 @@ sphere on a plane rendered with Cycles lit by the World (the reference) and
 by the rig alone (the result). Where this Blender can draw EEVEE (the bpy
 5.x module, after gpu.init()), the same scene also in EEVEE: lit by the
 World and by a rig of EEVEE_LIGHTS suns built for EEVEE (target_renderer),
-both against Cycles' World render. Then a 12-frame rotating sequence made from
+both against Cycles' World render, and the rig also against Cycles' direct
+light (no bounce: what EEVEE's lamps draw at factory settings). Then a 12-frame rotating sequence made from
 the HDRI, decomposed into a keyframed, temporally filtered rig. The contact
 sheet shows the renders, their difference and the lights on the map.
 run(out_folder, demo) -> dict."""
@@ -136,8 +137,8 @@ def _eevee_available():
 
 def _eevee(scene, world, out_folder, settings, static):
     """The World and a rig of EEVEE_LIGHTS suns built for EEVEE, drawn by EEVEE
-    (factory settings, a transparent film), against Cycles' World render.
-    Leaves the scene on Cycles."""
+    (factory settings, a transparent film), against Cycles' World render;
+    the rig also against Cycles' direct light. Leaves the scene on Cycles."""
     started = time.perf_counter()
     rig = scene.penumbra.light_rig
     rig.collection.hide_render = True
@@ -153,14 +154,32 @@ def _eevee(scene, world, out_folder, settings, static):
     renders["rig"] = demo_render.render(scene, os.path.join(out_folder, "render_eevee_rig.exr"), 1)
     _set_world_light(world, True)
     scene.render.engine = "CYCLES"
-    result = {"samples": settings["eevee_samples"], "suns": EEVEE_LIGHTS}
+    direct = _direct_light_render(scene, rig, out_folder, settings)
+    result = {"samples": settings["eevee_samples"], "suns": EEVEE_LIGHTS,
+              "cycles_direct_mean_ratio": _compare(static["pictures"]["world"], direct)[2]}
     for name, picture in renders.items():
         difference, rmse, mean_ratio = _compare(static["pictures"]["world"], picture)
         result[name] = {"render_relative_rmse": rmse, "render_mean_ratio": mean_ratio}
         static["pictures"][f"eevee_{name}"] = picture
         static["pictures"][f"eevee_{name}_difference"] = difference
+    _, rmse, mean_ratio = _compare(direct, renders["rig"])
+    result["rig_vs_direct"] = {"render_relative_rmse": rmse, "render_mean_ratio": mean_ratio}
     result["seconds"] = round(time.perf_counter() - started, 3)
     return result
+
+
+def _direct_light_render(scene, rig, out_folder, settings):
+    """Cycles' World render with no bounce: the light EEVEE at factory
+    settings draws from lamps, which give no bounce light without baked
+    probes or Ray Tracing (docs/lights.md, "What stands between the rig and
+    goal 1"). Leaves the bounces and the rig as they were."""
+    bounces, hidden = scene.cycles.max_bounces, rig.collection.hide_render
+    scene.cycles.max_bounces = 0
+    rig.collection.hide_render = True
+    try:
+        return demo_render.render(scene, os.path.join(out_folder, "render_direct.exr"), settings["spp"])
+    finally:
+        scene.cycles.max_bounces, rig.collection.hide_render = bounces, hidden
 
 
 def _box_average(image):
@@ -223,9 +242,11 @@ def _sheet(static, settings, demo):
             cs.Tile(tile(demo_render.display(demo_render.unpremultiply(p["eevee_world"]), EXPOSURE)),
                     ["EEVEE, lit by the World", f"{eevee['samples']} samples"]),
             cs.Tile(tile(demo_render.display(demo_render.unpremultiply(p["eevee_rig"]), EXPOSURE)),
-                    ["EEVEE, lit by the rig", f"{eevee['suns']} suns built for EEVEE"]),
+                    ["EEVEE, lit by the rig", f"{eevee['suns']} suns built for EEVEE",
+                     f"mean {eevee['rig_vs_direct']['render_mean_ratio']:.3f} of Cycles, no bounce"]),
             cs.Tile(tile(cs.heat(p["eevee_rig_difference"], DIFFERENCE_SCALE)),
-                    ["|EEVEE rig - Cycles World| / mean", f"0 - {DIFFERENCE_SCALE:g}"]),
+                    ["|EEVEE rig - Cycles World| / mean", f"0 - {DIFFERENCE_SCALE:g}",
+                     f"Cycles, no bounce: mean {eevee['cycles_direct_mean_ratio']:.3f}"]),
         ], f"EEVEE / Cycles' World render: World RMSE {100 * w['render_relative_rmse']:.1f} %, mean "
            f"{w['render_mean_ratio']:.3f}; rig RMSE {100 * r['render_relative_rmse']:.1f} %, mean "
            f"{r['render_mean_ratio']:.3f}")
@@ -266,6 +287,7 @@ def run(out_folder, demo):
         error += "".join(f"; EEVEE {name} {100 * e[key]['render_relative_rmse']:.1f} % "
                          f"(mean {e[key]['render_mean_ratio']:.3f})"
                          for key, name in (("world", "World"), ("rig", "rig")))
+        error += f", {e['rig_vs_direct']['render_mean_ratio']:.3f} of Cycles' direct light"
     demo.step("lights sheet", f"{os.path.basename(sheet_path)}: {made}, {size[0]}×{size[1]}", error,
               static["render_seconds"] + time.perf_counter() - started)
     animated = _animated_rig(scene, hdri, out_folder, settings, demo)

@@ -121,3 +121,8 @@ def test_demo_errors_say_what_the_readme_says(quick_demo):
     for lit_by in ("world", "rig"):
         assert eevee[lit_by]["render_relative_rmse"] < 0.3, lit_by
         assert 0.85 < eevee[lit_by]["render_mean_ratio"] < 1.05, lit_by
+    # What the sheet shows of the gap: Cycles without bounce light is that
+    # much darker than the World render, and EEVEE's rig matches it (the
+    # make-test check's 4 %). Measured in quick mode: 0.890 and 1.017.
+    assert eevee["cycles_direct_mean_ratio"] < 0.95, eevee
+    assert abs(eevee["rig_vs_direct"]["render_mean_ratio"] - 1.0) < 0.04, eevee
