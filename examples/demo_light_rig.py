@@ -5,9 +5,10 @@ by the rig alone (the result). Where this Blender can draw EEVEE (the bpy
 5.x module, after gpu.init()), the same scene also in EEVEE: lit by the
 World and by a rig of EEVEE_LIGHTS suns built for EEVEE (target_renderer),
 both against Cycles' World render, and the rig also against Cycles' direct
-light (no bounce: what EEVEE's lamps draw at factory settings). Then a 12-frame rotating sequence made from
-the HDRI, decomposed into a keyframed, temporally filtered rig. The contact
-sheet shows the renders, their difference and the lights on the map.
+light (no bounce: what EEVEE's lamps draw at factory settings). Then a
+12-frame rotating sequence made from the HDRI, decomposed into a keyframed,
+temporally filtered rig. The contact sheet shows the renders, their
+difference and the lights on the map.
 run(out_folder, demo) -> dict."""
 
 import math
